@@ -1,0 +1,416 @@
+"""Compiled EKF-SLAM kernels: prediction, correction and landmark initialisation, in place.
+
+Why compiled: one numpy call costs a few microseconds whatever its size at these dimensions, and the env calls
+the filter millions of times (../shared/MATH.md, "Costs that matter"). Each kernel touches only what changes:
+prediction the three pose rows and columns (O(N)); correction the N x 2m block Sigma H^T and the rank-2m
+update of Sigma (O(m N^2)); no G, F_x, F_x,j or H of full size is ever built.
+
+The log-determinant of Sigma is kept exactly by the identities in MATH.md, using P, the pose covariance
+conditioned on the map (the Schur complement of the map block):
+- prediction:  P <- G P G^T + R,               d log det = log det P' - log det P
+- correction:  P^-1 <- P^-1 + sum Hx^T Q^-1 Hx,  d log det = sum log det Q - log det S
+- inverse init: P^-1 <- P^-1 + Gr^T T^-1 Gr,     d log det = log det T - log det(prior block), T = Gz Q Gz^T
+
+Status codes returned to the Python wrapper: OK, NOT_PD (innovation covariance not positive definite),
+BAD_ID (a landmark index outside [0, n)), BAD_INPUT (a non-finite control, noise or reading).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .models import inverse_range_bearing, odometry_motion, range_bearing, velocity_motion, wrap_angle
+
+OK = 0
+NOT_PD = 1
+BAD_ID = 2
+BAD_INPUT = 3
+
+MODEL_ODOMETRY = 0
+MODEL_VELOCITY = 1
+
+
+@njit(cache=True)
+def det3(a: np.ndarray) -> float:
+    return (
+        a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
+        - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+        + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])
+    )
+
+
+@njit(cache=True)
+def inv3(a: np.ndarray) -> np.ndarray:
+    """Inverse of a 3x3 matrix by cofactors (symmetric input gives symmetric output)."""
+    out = np.empty((3, 3))
+    out[0, 0] = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
+    out[0, 1] = a[0, 2] * a[2, 1] - a[0, 1] * a[2, 2]
+    out[0, 2] = a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1]
+    out[1, 0] = a[1, 2] * a[2, 0] - a[1, 0] * a[2, 2]
+    out[1, 1] = a[0, 0] * a[2, 2] - a[0, 2] * a[2, 0]
+    out[1, 2] = a[0, 2] * a[1, 0] - a[0, 0] * a[1, 2]
+    out[2, 0] = a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]
+    out[2, 1] = a[0, 1] * a[2, 0] - a[0, 0] * a[2, 1]
+    out[2, 2] = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
+    d = a[0, 0] * out[0, 0] + a[0, 1] * out[1, 0] + a[0, 2] * out[2, 0]
+    for i in range(3):
+        for j in range(3):
+            out[i, j] /= d
+    return out
+
+
+@njit(cache=True)
+def logdet2(a: np.ndarray) -> float:
+    return math.log(a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0])
+
+
+@njit(cache=True)
+def inv2(a: np.ndarray) -> np.ndarray:
+    d = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
+    out = np.empty((2, 2))
+    out[0, 0] = a[1, 1] / d
+    out[1, 1] = a[0, 0] / d
+    out[0, 1] = -a[0, 1] / d
+    out[1, 0] = -a[1, 0] / d
+    return out
+
+
+@njit(cache=True)
+def sandwich(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """A B A^T by plain loops: for these 2x2 and 3x3 sizes a BLAS call costs more than the arithmetic."""
+    rows = A.shape[0]
+    inner = A.shape[1]
+    AB = np.zeros((rows, inner))
+    for i in range(rows):
+        for j in range(inner):
+            v = 0.0
+            for p in range(inner):
+                v += A[i, p] * B[p, j]
+            AB[i, j] = v
+    out = np.empty((rows, rows))
+    for i in range(rows):
+        for j in range(rows):
+            v = 0.0
+            for p in range(inner):
+                v += AB[i, p] * A[j, p]
+            out[i, j] = v
+    return out
+
+
+@njit(cache=True)
+def sandwich_t(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """A^T B A by plain loops."""
+    return sandwich(A.T.copy(), B)
+
+
+@njit(cache=True)
+def _symmetric_3x3(a: np.ndarray) -> None:
+    for i in range(3):
+        for j in range(i + 1, 3):
+            m = 0.5 * (a[i, j] + a[j, i])
+            a[i, j] = m
+            a[j, i] = m
+
+
+@njit(cache=True)
+def predict(mean, cov, P, model, control, dt, noise, noise_in_control_space, track):
+    """Move the pose by the motion model; update the pose rows/columns of cov and, if tracking, P.
+
+    ``noise`` is R (3x3, pose space) or, with ``noise_in_control_space``, M (control space) giving R = V M V^T.
+    Returns (change of log det Sigma (0.0 when not tracking), status).
+    """
+    if model == MODEL_ODOMETRY:
+        new_pose, G, V = odometry_motion(mean[:3], control[0], control[1], control[2])
+    else:
+        new_pose, G, V = velocity_motion(mean[:3], control[0], control[1], dt)
+    for i in range(noise.shape[0]):
+        for j in range(noise.shape[1]):
+            if not math.isfinite(noise[i, j]):
+                return 0.0, BAD_INPUT
+    for i in range(3):
+        if not math.isfinite(control[i]):
+            return 0.0, BAD_INPUT
+    if noise_in_control_space:
+        R = sandwich(V, noise)
+    else:
+        R = noise.copy()
+    _symmetric_3x3(R)
+    mean[0] = new_pose[0]
+    mean[1] = new_pose[1]
+    mean[2] = new_pose[2]
+
+    pose_block = sandwich(G, cov[:3, :3].copy()) + R
+    _symmetric_3x3(pose_block)
+    n = mean.shape[0]
+    for c in range(3, n):
+        a0 = cov[0, c]
+        a1 = cov[1, c]
+        a2 = cov[2, c]
+        for r in range(3):
+            v = G[r, 0] * a0 + G[r, 1] * a1 + G[r, 2] * a2
+            cov[r, c] = v
+            cov[c, r] = v
+    cov[:3, :3] = pose_block
+
+    if not track:
+        return 0.0, OK
+    new_P = sandwich(G, P) + R
+    _symmetric_3x3(new_P)
+    delta = math.log(det3(new_P)) - math.log(det3(P))
+    P[:, :] = new_P
+    return delta, OK
+
+
+@njit(cache=True)
+def _cholesky_in_place(S: np.ndarray) -> bool:
+    """Lower Cholesky factor of S written into S (upper part zeroed); False if S is not positive definite."""
+    k = S.shape[0]
+    for j in range(k):
+        d = S[j, j]
+        for p in range(j):
+            d -= S[j, p] * S[j, p]
+        if not d > 0.0:
+            return False
+        d = math.sqrt(d)
+        S[j, j] = d
+        for i in range(j + 1, k):
+            v = S[i, j]
+            for p in range(j):
+                v -= S[i, p] * S[j, p]
+            S[i, j] = v / d
+        for i in range(j):
+            S[i, j] = 0.0
+    return True
+
+
+@njit(cache=True)
+def _update(mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track):
+    """One EKF correction with the given readings of already-initialised landmarks.
+
+    Sigma <- Sigma - W W^T with W = (Sigma H^T) L^-T, S = L L^T: algebraically the course's (I - K H) Sigma,
+    exactly symmetric (each entry sums the same products in the same order) and O(m N^2).
+    Returns (change of log det Sigma, status).
+    """
+    m = slots.shape[0]
+    if m == 0:
+        return 0.0, OK
+    n = mean.shape[0]
+    k = 2 * m
+    Hx = np.empty((m, 2, 3))
+    Hm = np.empty((m, 2, 2))
+    cols = np.empty(m, np.int64)
+    innovation = np.empty(k)
+    PHt = np.empty((n, k))
+    for a in range(m):
+        lj = 3 + 2 * slots[a]
+        cols[a] = lj
+        zhat, hx, hm = range_bearing(mean[:3], mean[lj : lj + 2], min_range)
+        Hx[a] = hx
+        Hm[a] = hm
+        innovation[2 * a] = readings[a, 0] - zhat[0]
+        innovation[2 * a + 1] = wrap_angle(readings[a, 1] - zhat[1])
+        for row in range(n):
+            c0 = cov[row, 0]
+            c1 = cov[row, 1]
+            c2 = cov[row, 2]
+            cl0 = cov[row, lj]
+            cl1 = cov[row, lj + 1]
+            for r in range(2):
+                PHt[row, 2 * a + r] = (
+                    c0 * hx[r, 0] + c1 * hx[r, 1] + c2 * hx[r, 2] + cl0 * hm[r, 0] + cl1 * hm[r, 1]
+                )
+
+    S = np.empty((k, k))
+    for a in range(m):
+        lj = cols[a]
+        for r in range(2):
+            for c in range(k):
+                S[2 * a + r, c] = (
+                    Hx[a, r, 0] * PHt[0, c]
+                    + Hx[a, r, 1] * PHt[1, c]
+                    + Hx[a, r, 2] * PHt[2, c]
+                    + Hm[a, r, 0] * PHt[lj, c]
+                    + Hm[a, r, 1] * PHt[lj + 1, c]
+                )
+    for i in range(k):
+        for j in range(i + 1, k):
+            v = 0.5 * (S[i, j] + S[j, i])
+            S[i, j] = v
+            S[j, i] = v
+    for a in range(m):
+        for r in range(2):
+            for c in range(2):
+                S[2 * a + r, 2 * a + c] += Q[r, c]
+    if not _cholesky_in_place(S):
+        return 0.0, NOT_PD
+    L = S
+
+    # W^T = L^-1 (Sigma H^T)^T, stored transposed (k x n) so the rank-k update runs along contiguous rows.
+    Wt = np.empty((k, n))
+    for row in range(n):
+        for i in range(k):
+            v = PHt[row, i]
+            for p in range(i):
+                v -= L[i, p] * Wt[p, row]
+            Wt[i, row] = v / L[i, i]
+    y = np.empty(k)
+    for i in range(k):
+        v = innovation[i]
+        for p in range(i):
+            v -= L[i, p] * y[p]
+        y[i] = v / L[i, i]
+
+    for row in range(n):
+        v = 0.0
+        for i in range(k):
+            v += Wt[i, row] * y[i]
+        mean[row] += v
+    mean[2] = wrap_angle(mean[2])
+    for row in range(n):
+        for i in range(k):
+            w = Wt[i, row]
+            for col in range(n):
+                cov[row, col] -= w * Wt[i, col]
+
+    if not track:
+        return 0.0, OK
+    logdet_S = 0.0
+    for i in range(k):
+        logdet_S += 2.0 * math.log(L[i, i])
+    info = inv3(P)
+    for a in range(m):
+        info += sandwich_t(Hx[a], Q_inv)
+    _symmetric_3x3(info)
+    P[:, :] = inv3(info)
+    return m * logdet_Q - logdet_S, OK
+
+
+@njit(cache=True)
+def _initialise_inverse(mean, cov, P, slot, reading, Q, track):
+    """Inverse-model initialisation: the landmark's mean and covariance blocks from the reading.
+
+    Replaces the landmark's (uncorrelated, prior) block; the reading is not used again. Returns the change of
+    log det Sigma (0.0 when not tracking).
+    """
+    lj = 3 + 2 * slot
+    landmark, Gr, Gz = inverse_range_bearing(mean[:3], reading)
+    old_logdet = logdet2(cov[lj : lj + 2, lj : lj + 2])
+    T = sandwich(Gz, Q)
+    cross = np.empty((2, cov.shape[1]))
+    for c in range(cov.shape[1]):
+        for r in range(2):
+            cross[r, c] = Gr[r, 0] * cov[0, c] + Gr[r, 1] * cov[1, c] + Gr[r, 2] * cov[2, c]
+    block = sandwich(Gr, cov[:3, :3].copy()) + T
+    n = mean.shape[0]
+    for c in range(n):
+        cov[lj, c] = cross[0, c]
+        cov[lj + 1, c] = cross[1, c]
+        cov[c, lj] = cross[0, c]
+        cov[c, lj + 1] = cross[1, c]
+    cov[lj, lj] = block[0, 0]
+    cov[lj + 1, lj + 1] = block[1, 1]
+    off = 0.5 * (block[0, 1] + block[1, 0])
+    cov[lj, lj + 1] = off
+    cov[lj + 1, lj] = off
+    mean[lj] = landmark[0]
+    mean[lj + 1] = landmark[1]
+    if not track:
+        return 0.0
+    info = inv3(P) + sandwich_t(Gr, inv2(T))
+    _symmetric_3x3(info)
+    P[:, :] = inv3(info)
+    return logdet2(T) - old_logdet
+
+
+@njit(cache=True)
+def correct(mean, cov, P, observed, ids, readings, Q, min_range, course_init, sequential, track):
+    """Correct with m range-bearing readings of known landmarks (ids are 0-based slots).
+
+    Course initialisation: a landmark's first reading sets its mean (its prior covariance stays) and is then
+    used in the update. Inverse initialisation: the first reading of a landmark initialises it from the
+    inverse sensor model and is not used again (further readings of it in the same step are dropped; readings
+    closer than ``min_range`` never initialise). Batch: all readings in one update (inverse initialisations
+    after it, from the corrected pose); sequential: one reading at a time, relinearising between them.
+    Returns (change of log det Sigma, status, number of readings used in updates).
+    """
+    m = ids.shape[0]
+    n_landmarks = observed.shape[0]
+    for i in range(m):
+        if ids[i] < 0 or ids[i] >= n_landmarks:
+            return 0.0, BAD_ID, 0
+        if not (math.isfinite(readings[i, 0]) and math.isfinite(readings[i, 1])):
+            return 0.0, BAD_INPUT, 0
+    Q_inv = inv2(Q)
+    logdet_Q = logdet2(Q)
+    delta = 0.0
+    used = 0
+
+    if sequential:
+        one_slot = np.empty(1, np.int64)
+        one_reading = np.empty((1, 2))
+        for i in range(m):
+            slot = ids[i]
+            if not observed[slot]:
+                if course_init:
+                    landmark, _, _ = inverse_range_bearing(mean[:3], readings[i])
+                    mean[3 + 2 * slot] = landmark[0]
+                    mean[4 + 2 * slot] = landmark[1]
+                    observed[slot] = True
+                else:
+                    if readings[i, 0] >= min_range:
+                        delta += _initialise_inverse(mean, cov, P, slot, readings[i], Q, track)
+                        observed[slot] = True
+                    continue
+            one_slot[0] = slot
+            one_reading[0, 0] = readings[i, 0]
+            one_reading[0, 1] = readings[i, 1]
+            d, status = _update(mean, cov, P, one_slot, one_reading, Q, Q_inv, logdet_Q, min_range, track)
+            if status != OK:
+                return delta, status, used
+            delta += d
+            used += 1
+        return delta, OK, used
+
+    use = np.zeros(m, np.bool_)
+    to_initialise = np.zeros(m, np.bool_)
+    for i in range(m):
+        slot = ids[i]
+        if observed[slot]:
+            use[i] = True
+        elif course_init:
+            landmark, _, _ = inverse_range_bearing(mean[:3], readings[i])
+            mean[3 + 2 * slot] = landmark[0]
+            mean[4 + 2 * slot] = landmark[1]
+            observed[slot] = True
+            use[i] = True
+        elif readings[i, 0] >= min_range:
+            first = True
+            for p in range(i):
+                if to_initialise[p] and ids[p] == slot:
+                    first = False
+            to_initialise[i] = first
+    n_use = 0
+    for i in range(m):
+        if use[i]:
+            n_use += 1
+    slots = np.empty(n_use, np.int64)
+    chosen = np.empty((n_use, 2))
+    a = 0
+    for i in range(m):
+        if use[i]:
+            slots[a] = ids[i]
+            chosen[a, 0] = readings[i, 0]
+            chosen[a, 1] = readings[i, 1]
+            a += 1
+    d, status = _update(mean, cov, P, slots, chosen, Q, Q_inv, logdet_Q, min_range, track)
+    if status != OK:
+        return 0.0, status, 0
+    delta += d
+    for i in range(m):
+        if to_initialise[i]:
+            delta += _initialise_inverse(mean, cov, P, ids[i], readings[i], Q, track)
+            observed[ids[i]] = True
+    return delta, OK, n_use

@@ -1,0 +1,315 @@
+"""EKF-SLAM with known correspondences, a fixed number of landmarks and an exact running log det Sigma.
+
+The state is mu = (x, y, theta, m1x, m1y, ..., mnx, mny), N = 3 + 2n, with covariance Sigma. The heavy lifting
+is in ``_kernels`` (compiled, touching only what changes); this class validates input, holds the state and
+keeps the log-determinant bookkeeping honest (start it from a Cholesky once Sigma is definite, re-synchronise
+every ``resync_every`` filter calls to bound rounding drift).
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import Literal
+
+import numpy as np
+
+from . import _kernels as K
+
+COURSE_MOTION_NOISE = np.diag([0.1, 0.1, 0.01])
+COURSE_MEASUREMENT_NOISE = 0.01 * np.eye(2)
+
+MotionModel = Literal["odometry", "velocity"]
+InitMode = Literal["course", "inverse"]
+UpdateMode = Literal["batch", "sequential"]
+
+
+class FilterDivergedError(RuntimeError):
+    """The filter's covariance lost positive definiteness (an innovation covariance or Sigma itself)."""
+
+
+def _as_covariance(value, size: int, name: str) -> np.ndarray:
+    """Accept a scalar variance, a diagonal of variances or a full matrix; check it is symmetric PD."""
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        arr = float(arr) * np.eye(size)
+    elif arr.shape == (size,):
+        arr = np.diag(arr)
+    elif arr.shape != (size, size):
+        raise ValueError(
+            f"{name} must be a scalar, a ({size},) diagonal or a ({size}, {size}) matrix, got {arr.shape}"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite")
+    if not np.allclose(arr, arr.T):
+        raise ValueError(f"{name} must be symmetric")
+    return np.ascontiguousarray(0.5 * (arr + arr.T))
+
+
+def _check_positive_definite(arr: np.ndarray, name: str) -> None:
+    if np.any(np.linalg.eigvalsh(arr) <= 0):
+        raise ValueError(f"{name} must be positive definite")
+
+
+class EKFSLAM:
+    """EKF-SLAM for ``n_landmarks`` point landmarks observed by a range-bearing sensor.
+
+    Args:
+        n_landmarks: number of landmark slots (fixed; readings name them by 0-based index).
+        motion_model: ``"odometry"`` (control (rot1, trans, rot2), seed 002) or ``"velocity"`` (control
+            (v, omega) applied for ``dt`` seconds, seed 000).
+        dt: control period in seconds for the velocity model.
+        motion_noise: R, the pose-space noise added at every prediction (3x3, a (3,) diagonal or a scalar);
+            default the course's diag(0.1, 0.1, 0.01). ``predict`` can override it per step, in pose space or
+            in control space (R = V M V^T).
+        measurement_noise: Q, the covariance of one (range, bearing) reading; default the course's 0.01 I.
+        landmark_prior: prior variance (m^2) of every unseen landmark coordinate. Bounded on purpose: an
+            infinite prior makes log det Sigma meaningless.
+        pose_prior: initial pose covariance (scalar, (3,) diagonal or 3x3); the course's is 0, which leaves
+            Sigma singular (log det = -inf) until the first prediction.
+        init_mode: ``"course"`` (the first reading sets the landmark's mean, its prior covariance stays, and the
+            reading is then used in the update) or ``"inverse"`` (mean and covariance blocks from the inverse
+            sensor model and its Jacobians, replacing the prior block; that reading is not used again).
+        update: ``"batch"`` (all readings of a step in one update, as the course does) or ``"sequential"`` (one
+            reading at a time, relinearising in between).
+        initial_pose: the pose mean at time 0 (default the origin).
+        min_range: metres; below it the range-bearing Jacobian uses this range instead of dividing by ~0, and a
+            reading this close never initialises a landmark in inverse mode.
+        resync_every: recompute log det Sigma and P from a Cholesky after this many filter calls (0: never).
+    """
+
+    def __init__(
+        self,
+        n_landmarks: int,
+        *,
+        motion_model: MotionModel = "odometry",
+        dt: float = 0.1,
+        motion_noise=COURSE_MOTION_NOISE,
+        measurement_noise=COURSE_MEASUREMENT_NOISE,
+        landmark_prior: float = 1000.0,
+        pose_prior=0.0,
+        init_mode: InitMode = "course",
+        update: UpdateMode = "batch",
+        initial_pose=None,
+        min_range: float = 1e-3,
+        resync_every: int = 1000,
+    ) -> None:
+        if isinstance(n_landmarks, bool) or not isinstance(n_landmarks, (int, np.integer)) or n_landmarks < 0:
+            raise ValueError(f"n_landmarks must be a non-negative integer, got {n_landmarks!r}")
+        if motion_model not in ("odometry", "velocity"):
+            raise ValueError(f"motion_model must be 'odometry' or 'velocity', got {motion_model!r}")
+        if init_mode not in ("course", "inverse"):
+            raise ValueError(f"init_mode must be 'course' or 'inverse', got {init_mode!r}")
+        if update not in ("batch", "sequential"):
+            raise ValueError(f"update must be 'batch' or 'sequential', got {update!r}")
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
+        if not (np.isfinite(landmark_prior) and landmark_prior > 0):
+            raise ValueError(f"landmark_prior must be a positive finite variance, got {landmark_prior!r}")
+        if not (np.isfinite(min_range) and min_range > 0):
+            raise ValueError(f"min_range must be positive, got {min_range!r}")
+        if int(resync_every) < 0:
+            raise ValueError(f"resync_every must be >= 0, got {resync_every!r}")
+
+        self.n_landmarks = int(n_landmarks)
+        self.motion_model: MotionModel = motion_model
+        self.dt = float(dt)
+        self.init_mode: InitMode = init_mode
+        self.update_mode: UpdateMode = update
+        self.min_range = float(min_range)
+        self.resync_every = int(resync_every)
+        self.landmark_prior = float(landmark_prior)
+        self.motion_noise = _as_covariance(motion_noise, 3, "motion_noise")
+        self.measurement_noise = _as_covariance(measurement_noise, 2, "measurement_noise")
+        _check_positive_definite(self.measurement_noise, "measurement_noise")
+        pose_cov0 = _as_covariance(pose_prior, 3, "pose_prior")
+
+        size = 3 + 2 * self.n_landmarks
+        self._mean = np.zeros(size)
+        if initial_pose is not None:
+            pose = np.asarray(initial_pose, dtype=float)
+            if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+                raise ValueError(f"initial_pose must be 3 finite numbers, got {initial_pose!r}")
+            self._mean[:3] = pose
+            self._mean[2] = K.wrap_angle(pose[2])
+        self._cov = np.zeros((size, size))
+        self._cov[:3, :3] = pose_cov0
+        idx = np.arange(3, size)
+        self._cov[idx, idx] = self.landmark_prior
+        self._observed = np.zeros(self.n_landmarks, dtype=bool)
+        self._model_code = K.MODEL_ODOMETRY if motion_model == "odometry" else K.MODEL_VELOCITY
+        self._control = np.zeros(3)
+        self._P = np.zeros((3, 3))
+        self._log_det = -np.inf
+        self._tracking = False
+        self._calls_since_resync = 0
+        self.resync()
+
+    # ------------------------------------------------------------------ state
+    @property
+    def state_size(self) -> int:
+        return self._mean.shape[0]
+
+    @property
+    def mean(self) -> np.ndarray:
+        """The full state mean (N,), read-only view."""
+        return _read_only(self._mean)
+
+    @property
+    def cov(self) -> np.ndarray:
+        """The full covariance Sigma (N, N), read-only view."""
+        return _read_only(self._cov)
+
+    @property
+    def pose(self) -> np.ndarray:
+        return _read_only(self._mean[:3])
+
+    @property
+    def pose_cov(self) -> np.ndarray:
+        """Marginal pose covariance Sigma_xx (3, 3)."""
+        return _read_only(self._cov[:3, :3])
+
+    @property
+    def landmarks(self) -> np.ndarray:
+        """Landmark means (n, 2); unseen ones hold 0 until initialised."""
+        return _read_only(self._mean[3:].reshape(-1, 2))
+
+    @property
+    def observed(self) -> np.ndarray:
+        """Which landmarks have been initialised (n,) bool."""
+        return _read_only(self._observed)
+
+    @property
+    def log_det(self) -> float:
+        """log det Sigma, kept incrementally; -inf while Sigma is singular (the course's zero pose prior)."""
+        return self._log_det
+
+    @property
+    def pose_cov_given_map(self) -> np.ndarray:
+        """P, the pose covariance conditioned on the map (Schur complement of the map block); zeros until
+        Sigma is definite. log det Sigma = log det Sigma_mm + log det P."""
+        return _read_only(self._P)
+
+    def landmark_cov(self, index: int) -> np.ndarray:
+        """Marginal covariance (2, 2) of landmark ``index`` (0-based)."""
+        if not 0 <= index < self.n_landmarks:
+            raise IndexError(f"landmark index {index} outside [0, {self.n_landmarks})")
+        j = 3 + 2 * index
+        return self._cov[j : j + 2, j : j + 2].copy()
+
+    def landmark_covs(self) -> np.ndarray:
+        """Marginal covariances of all landmarks (n, 2, 2), a copy."""
+        diag = np.diagonal(self._cov)[3:]
+        out = np.empty((self.n_landmarks, 2, 2))
+        out[:, 0, 0] = diag[0::2]
+        out[:, 1, 1] = diag[1::2]
+        off = self._cov[3::2, 4::2].diagonal() if self.n_landmarks else np.empty(0)
+        out[:, 0, 1] = off
+        out[:, 1, 0] = off
+        return out
+
+    def copy(self) -> EKFSLAM:
+        """An independent copy (for planners that simulate the filter forward)."""
+        return copy.deepcopy(self)
+
+    # ------------------------------------------------------------------ filter
+    def predict(self, control, *, motion_cov=None, control_cov=None) -> float:
+        """Prediction with the motion model; returns the change of log det Sigma.
+
+        ``control`` is (rot1, trans, rot2) for the odometry model or (v, omega) for the velocity model.
+        Noise: ``motion_cov`` (pose space, 3x3) or ``control_cov`` (control space: 3x3 odometry, 2x2 velocity,
+        mapped through V M V^T); neither means the constructor's ``motion_noise``.
+        """
+        control = np.asarray(control, dtype=float)
+        width = 3 if self._model_code == K.MODEL_ODOMETRY else 2
+        if control.shape != (width,):
+            raise ValueError(
+                f"control must be {width} numbers for the {self.motion_model} model, got {control!r}"
+            )
+        self._control[:width] = control
+        if control_cov is not None:
+            noise = np.asarray(control_cov, dtype=float)
+            if noise.shape != (width, width):
+                raise ValueError(f"control_cov must be ({width}, {width}), got {noise.shape}")
+            in_control_space = True
+        else:
+            noise = self.motion_noise if motion_cov is None else np.asarray(motion_cov, dtype=float)
+            if noise.shape != (3, 3):
+                raise ValueError(f"motion_cov must be (3, 3), got {noise.shape}")
+            in_control_space = False
+        delta, status = K.predict(
+            self._mean, self._cov, self._P, self._model_code, self._control, self.dt,
+            np.ascontiguousarray(noise), in_control_space, self._tracking,
+        )  # fmt: skip
+        if status == K.BAD_INPUT:
+            raise ValueError(f"control and its noise must be finite, got {control!r}")
+        self._after_call(delta)
+        return delta
+
+    def correct(self, ids, readings, *, measurement_cov=None) -> float:
+        """Correction with range-bearing readings (known correspondences); returns the change of log det Sigma.
+
+        ``ids`` (m,) are 0-based landmark slots, ``readings`` (m, 2) are (range m, bearing rad). Raw bearings
+        need not be wrapped: the innovation is. Raises ``FilterDivergedError`` if an innovation covariance is
+        not positive definite.
+        """
+        ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+        readings = np.asarray(readings, dtype=float).reshape(-1, 2) if len(ids) else np.empty((0, 2))
+        if readings.shape[0] != ids.shape[0]:
+            raise ValueError(f"{ids.shape[0]} ids but {readings.shape[0]} readings")
+        Q = (
+            self.measurement_noise
+            if measurement_cov is None
+            else _as_covariance(measurement_cov, 2, "measurement_cov")
+        )
+        delta, status, _ = K.correct(
+            self._mean, self._cov, self._P, self._observed, ids, np.ascontiguousarray(readings), Q,
+            self.min_range, self.init_mode == "course", self.update_mode == "sequential", self._tracking,
+        )  # fmt: skip
+        if status == K.BAD_ID:
+            raise ValueError(f"landmark ids must lie in [0, {self.n_landmarks}), got {ids.tolist()}")
+        if status == K.BAD_INPUT:
+            raise ValueError("readings must be finite")
+        if status == K.NOT_PD:
+            raise FilterDivergedError("innovation covariance is not positive definite")
+        self._after_call(delta)
+        return delta
+
+    def _after_call(self, delta: float) -> None:
+        if self._tracking:
+            self._log_det += delta
+            self._calls_since_resync += 1
+            if self.resync_every and self._calls_since_resync >= self.resync_every:
+                self.resync()
+        else:
+            self.resync()
+
+    def resync(self) -> float:
+        """Recompute log det Sigma and P from a Cholesky of Sigma (O(N^3)); returns the correction applied.
+
+        While Sigma is singular (only the course's zero pose prior before the first prediction) log det stays
+        -inf and tracking waits; a Sigma that loses definiteness after that raises ``FilterDivergedError``.
+        """
+        try:
+            chol = np.linalg.cholesky(self._cov)
+        except np.linalg.LinAlgError:
+            if self._tracking:
+                raise FilterDivergedError("covariance is no longer positive definite") from None
+            return 0.0
+        log_det = 2.0 * float(np.sum(np.log(np.diagonal(chol))))
+        # P^-1 is the pose block of Sigma^-1 = L^-T L^-1, i.e. X^T X with X = L^-1 E (E the pose columns).
+        unit = np.zeros((self._cov.shape[0], 3))
+        unit[:3, :3] = np.eye(3)
+        x = np.linalg.solve(chol, unit)
+        info = x.T @ x
+        self._P[:, :] = np.linalg.inv(0.5 * (info + info.T))
+        drift = log_det - self._log_det if self._tracking else 0.0
+        self._log_det = log_det
+        self._tracking = True
+        self._calls_since_resync = 0
+        return drift
+
+
+def _read_only(arr: np.ndarray) -> np.ndarray:
+    view = arr.view()
+    view.flags.writeable = False
+    return view
