@@ -1,0 +1,20 @@
+"""Where the tests find the shared data sets (never copied into the repository)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+# The course data lives in ../shared/data/freiburg beside the repository (see its README.md there).
+_DEFAULT_FREIBURG = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "freiburg"
+
+
+def freiburg_dir() -> Path | None:
+    """The Freiburg data folder: $EKFSLAM_DATA_DIR (the folder itself, or one holding ``freiburg/``) if set,
+    else ../shared/data/freiburg beside the repository; None when neither exists."""
+    env = os.environ.get("EKFSLAM_DATA_DIR")
+    candidates = [Path(env), Path(env) / "freiburg"] if env else [_DEFAULT_FREIBURG]
+    for candidate in candidates:
+        if candidate.is_dir() and (any(candidate.glob("*.g2o")) or any(candidate.glob("*.dat"))):
+            return candidate
+    return None
