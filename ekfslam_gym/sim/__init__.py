@@ -1,0 +1,37 @@
+"""The simulator: layouts, a pymunk differential-drive robot, odometry and a range-bearing sensor.
+
+It knows nothing of the filter; the env composes the two. Units are metres, seconds and radians.
+"""
+
+from .layouts import LAYOUTS, Layout, make_layout, place_landmarks
+from .odometry import (
+    OdometryNoise,
+    OdometryReading,
+    VelocityNoise,
+    VelocityReading,
+    compose_odometry,
+    decompose_odometry,
+    velocity_from_motion,
+)
+from .robot import RobotParams
+from .sensor import RangeBearingSensor, Readings, SensorParams
+from .world import World
+
+__all__ = [
+    "LAYOUTS",
+    "Layout",
+    "OdometryNoise",
+    "OdometryReading",
+    "RangeBearingSensor",
+    "Readings",
+    "RobotParams",
+    "SensorParams",
+    "VelocityNoise",
+    "VelocityReading",
+    "World",
+    "compose_odometry",
+    "decompose_odometry",
+    "make_layout",
+    "place_landmarks",
+    "velocity_from_motion",
+]
