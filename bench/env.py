@@ -1,0 +1,104 @@
+"""Benchmark: raw env steps/s of EKFSLAM-v0, with a breakdown, against CartPole-v1 in the same run.
+
+    OPENBLAS_NUM_THREADS=1 python bench/env.py [--steps 20000] [--landmarks 10 50 200]
+
+Raw means one process, random actions drawn beforehand, no agent. The breakdown times each stage of a step
+on its own over the same kind of drive: physics (pymunk), odometry, sensing (landmark readings and the wall
+scan), filter (predict and correct), observation and the rest of ``step`` (reward, metrics, info).
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import time  # noqa: E402
+
+import gymnasium as gym  # noqa: E402
+import numpy as np  # noqa: E402
+
+import ekfslam_gym  # noqa: E402, F401
+from ekfslam_gym.envs import EKFSLAMEnv  # noqa: E402
+
+
+def steps_per_second(env, actions: np.ndarray, seed: int = 0) -> float:
+    env.reset(seed=seed)
+    step = env.step
+    start = time.perf_counter()
+    for action in actions:
+        _, _, terminated, truncated, _ = step(action)
+        if terminated or truncated:
+            env.reset()
+    return len(actions) / (time.perf_counter() - start)
+
+
+def breakdown(overrides: dict, steps: int) -> dict[str, float]:
+    """Microseconds per step of each stage, replaying one recorded drive stage by stage."""
+    env = EKFSLAMEnv(**overrides, max_episode_steps=10**9, done_std=0.0)
+    env.reset(seed=0)
+    world, ekf, rng = env.world, env.filter, env.np_random
+    actions = np.random.default_rng(1).uniform(-1, 1, (steps, 2))
+    v_max, w_max = env.config.robot.v_max, env.config.robot.omega_max
+    timings = dict.fromkeys(["physics", "odometry", "sensing", "filter", "observation", "total step"], 0.0)
+    clock = time.perf_counter
+    for a in actions:
+        t0 = clock()
+        world.step(a[0] * v_max, a[1] * w_max)
+        t1 = clock()
+        odometry = world.odometry(rng)
+        t2 = clock()
+        readings = world.sense(rng)
+        world.scan()
+        t3 = clock()
+        ekf.predict(odometry.u, control_cov=odometry.cov)
+        ekf.correct(readings.ids, readings.z)
+        t4 = clock()
+        env._observation()
+        t5 = clock()
+        timings["physics"] += t1 - t0
+        timings["odometry"] += t2 - t1
+        timings["sensing"] += t3 - t2
+        timings["filter"] += t4 - t3
+        timings["observation"] += t5 - t4
+    env.reset(seed=0)
+    timings["total step"] = 1.0 / steps_per_second(env, actions.astype(np.float32))
+    for key in timings:
+        if key != "total step":
+            timings[key] /= steps
+    timings["rest of step"] = timings["total step"] - sum(v for k, v in timings.items() if k != "total step")
+    return {k: v * 1e6 for k, v in timings.items()}
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--steps", type=int, default=20_000)
+    parser.add_argument("--landmarks", type=int, nargs="+", default=[10, 50, 200])
+    args = parser.parse_args(argv)
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-1, 1, (args.steps, 2)).astype(np.float32)
+
+    cartpole = gym.make("CartPole-v1").unwrapped
+    cart_actions = rng.integers(0, 2, args.steps)
+    cart_rate = steps_per_second(cartpole, cart_actions)
+
+    configs = [("default (30)", {})] + [(str(n), {"world": {"n_landmarks": n}}) for n in args.landmarks]
+    print(f"OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']}, {args.steps} random-action steps each")
+    print(f"CartPole-v1 unwrapped: {cart_rate:,.0f} steps/s")
+    print(f"{'landmarks':>12} | {'unwrapped':>10} {'gym.make':>10} | {'vs CartPole':>11}")
+    for name, overrides in configs:
+        EKFSLAMEnv(**overrides).reset(seed=0)  # compile and warm up outside the timing
+        raw = steps_per_second(EKFSLAMEnv(**overrides), actions)
+        made = steps_per_second(gym.make("EKFSLAM-v0", **overrides), actions)
+        print(f"{name:>12} | {raw:>10,.0f} {made:>10,.0f} | 1/{cart_rate / raw:>9.1f}")
+    print("\nbreakdown at the default config, microseconds per step:")
+    for stage, us in breakdown({}, min(args.steps, 10_000)).items():
+        print(f"  {stage:>12}: {us:6.1f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,247 @@
+"""One frozen, validated configuration per env, built once at construction and never mutated.
+
+Sections: ``world`` (layout and landmarks), ``robot``, ``sensor`` and ``odometry`` (the simulator's own
+parameter classes), ``filter``, ``reward``, ``observation``, and the episode settings at the top level. Build
+one from keyword overrides (``EnvConfig.from_overrides(world={"n_landmarks": 50})``) or a YAML file under
+``configs/env/`` (``EnvConfig.from_yaml(path)``); an unknown or invalid value raises ``ValueError`` naming the
+field, e.g. ``sensor.max_range``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..sim.odometry import OdometryNoise
+from ..sim.robot import RobotParams
+from ..sim.sensor import SensorParams
+
+
+def _require(condition: bool, name: str, message: str, value: Any) -> None:
+    if not condition:
+        raise ValueError(f"{name} {message}, got {value!r}")
+
+
+def _positive(name: str, value: Any) -> None:
+    _require(
+        isinstance(value, (int, float)) and math.isfinite(value) and value > 0, name, "must be > 0", value
+    )
+
+
+def _non_negative(name: str, value: Any) -> None:
+    _require(
+        isinstance(value, (int, float)) and math.isfinite(value) and value >= 0, name, "must be >= 0", value
+    )
+
+
+def _integer(name: str, value: Any, minimum: int) -> None:
+    ok = isinstance(value, int) and not isinstance(value, bool) and value >= minimum
+    _require(ok, name, f"must be an integer >= {minimum}", value)
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    """The layout generator (``arena``, ``rooms`` or ``loop``), the exact number of landmarks, and keyword
+    arguments passed to the generator (sizes in m, e.g. ``{"width": 20.0}``)."""
+
+    layout: str = "arena"
+    n_landmarks: int = 30
+    layout_kwargs: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        from ..sim.layouts import LAYOUTS
+
+        _require(self.layout in LAYOUTS, "world.layout", f"must be one of {sorted(LAYOUTS)}", self.layout)
+        _integer("world.n_landmarks", self.n_landmarks, 1)
+        _require(
+            isinstance(self.layout_kwargs, Mapping),
+            "world.layout_kwargs",
+            "must be a mapping",
+            self.layout_kwargs,
+        )
+        object.__setattr__(self, "layout_kwargs", dict(self.layout_kwargs))
+
+
+@dataclass(frozen=True)
+class FilterConfig:
+    """The EKF-SLAM inside the env.
+
+    motion_model: ``odometry`` (exact for any planar step, the default) or ``velocity``. init_mode: ``inverse``
+    (the standard for a simulated robot) or ``course``. landmark_prior: variance (m^2) at which every unseen
+    landmark is carried, so log det Sigma is finite and discovering a landmark pays a bounded amount.
+    pose_prior: initial pose variance (m^2 and rad^2; small and positive, so Sigma_0 is definite).
+    resync_every: filter calls between exact Cholesky re-synchronisations of the running log det.
+    """
+
+    motion_model: str = "odometry"
+    init_mode: str = "inverse"
+    update: str = "batch"
+    landmark_prior: float = 100.0
+    pose_prior: float = 1e-6
+    resync_every: int = 1000
+
+    def __post_init__(self) -> None:
+        _require(self.motion_model in ("odometry", "velocity"), "filter.motion_model", "must be odometry|velocity", self.motion_model)  # fmt: skip
+        _require(
+            self.init_mode in ("inverse", "course"),
+            "filter.init_mode",
+            "must be inverse|course",
+            self.init_mode,
+        )
+        _require(
+            self.update in ("batch", "sequential"), "filter.update", "must be batch|sequential", self.update
+        )
+        _positive("filter.landmark_prior", self.landmark_prior)
+        _positive("filter.pose_prior", self.pose_prior)
+        _integer("filter.resync_every", self.resync_every, 0)
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """Weights of the reward terms; the reward is their sum and ``info["reward_terms"]`` names each.
+
+    info_gain: weight of log det Sigma_{t-1} - log det Sigma_t (the D-optimal information gain, the default).
+    a_opt, e_opt: weights of the drops of log trace Sigma and log lambda_max(Sigma) (A- and E-optimality).
+    collision: penalty per step in contact with a wall. control_effort: penalty times |action|^2.
+    step_cost: a constant cost per step (discourages idling once nothing is left to learn).
+    """
+
+    info_gain: float = 1.0
+    a_opt: float = 0.0
+    e_opt: float = 0.0
+    collision: float = 1.0
+    control_effort: float = 0.0
+    step_cost: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("info_gain", "a_opt", "e_opt", "collision", "control_effort", "step_cost"):
+            value = getattr(self, name)
+            _require(isinstance(value, (int, float)) and math.isfinite(value), f"reward.{name}", "must be finite", value)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class ObservationConfig:
+    """What the observation holds. kind: ``box`` (one flat float32 vector) or ``dict`` (named parts).
+    k_nearest: landmark slots, the seen landmarks nearest the pose estimate, nearest first. grid: cells per
+    side of the coverage grid over the world's bounds (where the sensor has already looked)."""
+
+    kind: str = "box"
+    k_nearest: int = 8
+    grid: int = 8
+
+    def __post_init__(self) -> None:
+        _require(self.kind in ("box", "dict"), "observation.kind", "must be box|dict", self.kind)
+        _integer("observation.k_nearest", self.k_nearest, 1)
+        _integer("observation.grid", self.grid, 1)
+
+
+@dataclass(frozen=True)
+class EnvConfig:
+    """Everything an EKFSLAM env needs; see the section classes for units and meanings.
+
+    dt: control period (s); substeps: physics steps per control step; max_episode_steps: the time limit
+    (truncation, and the horizon of the observation's time-left term); terminate_on_collision: end the episode
+    at the first wall contact; done_std: end the episode when every landmark's marginal standard deviation
+    (sqrt of the larger eigenvalue of its 2x2 covariance, m) is below this (0 disables); loop_gap: a re-observed
+    landmark unseen for at least this many steps counts as a loop closure.
+    """
+
+    world: WorldConfig = field(default_factory=WorldConfig)
+    robot: RobotParams = field(default_factory=RobotParams)
+    sensor: SensorParams = field(default_factory=SensorParams)
+    odometry: OdometryNoise = field(default_factory=OdometryNoise)
+    filter: FilterConfig = field(default_factory=FilterConfig)
+    reward: RewardConfig = field(default_factory=RewardConfig)
+    observation: ObservationConfig = field(default_factory=ObservationConfig)
+    dt: float = 0.1
+    substeps: int = 2
+    max_episode_steps: int = 500
+    terminate_on_collision: bool = False
+    done_std: float = 0.1
+    loop_gap: int = 50
+
+    def __post_init__(self) -> None:
+        _positive("dt", self.dt)
+        _integer("substeps", self.substeps, 1)
+        _integer("max_episode_steps", self.max_episode_steps, 1)
+        _require(isinstance(self.terminate_on_collision, bool), "terminate_on_collision", "must be a bool", self.terminate_on_collision)  # fmt: skip
+        _non_negative("done_std", self.done_std)
+        _integer("loop_gap", self.loop_gap, 1)
+
+    # ------------------------------------------------------------------ building
+    @classmethod
+    def from_overrides(cls, base: EnvConfig | None = None, **overrides: Any) -> EnvConfig:
+        """``base`` (default: the defaults) with nested overrides, e.g. ``sensor={"max_range": 4.0}``."""
+        return _replace(base if base is not None else cls(), overrides, "")
+
+    @classmethod
+    def from_yaml(cls, path: str | Path, **overrides: Any) -> EnvConfig:
+        """Load a YAML file of (possibly partial) sections, then apply ``overrides`` on top."""
+        import yaml
+
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"env config {path} does not exist")
+        data = yaml.safe_load(path.read_text()) or {}
+        if not isinstance(data, Mapping):
+            raise ValueError(f"{path}: the top level must be a mapping of config sections")
+        try:
+            config = cls.from_overrides(**data)
+        except ValueError as error:
+            raise ValueError(f"{path}: {error}") from None
+        return cls.from_overrides(config, **overrides)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A plain nested dict (YAML- and JSON-friendly) that ``from_overrides(**d)`` turns back into this."""
+        return dataclasses.asdict(self)
+
+
+def _replace(obj: Any, overrides: Mapping[str, Any], prefix: str) -> Any:
+    """dataclasses.replace, recursively, with errors that name the full field path."""
+    if not isinstance(overrides, Mapping):
+        raise ValueError(f"{prefix.rstrip('.') or 'config'} must be a mapping, got {overrides!r}")
+    fields = {f.name: f for f in dataclasses.fields(obj)}
+    changes: dict[str, Any] = {}
+    for key, value in overrides.items():
+        if key not in fields:
+            raise ValueError(f"unknown config field {prefix}{key!s}; known: {sorted(fields)}")
+        current = getattr(obj, key)
+        if dataclasses.is_dataclass(current) and isinstance(value, Mapping):
+            changes[key] = _replace(current, value, f"{prefix}{key}.")
+        elif dataclasses.is_dataclass(current) and isinstance(value, type(current)):
+            changes[key] = value
+        elif dataclasses.is_dataclass(current):
+            raise ValueError(f"{prefix}{key} must be a mapping of its fields, got {value!r}")
+        else:
+            changes[key] = _coerce(value, current, f"{prefix}{key}")
+    try:
+        return dataclasses.replace(obj, **changes)
+    except (ValueError, TypeError) as error:
+        message = str(error)
+        section = prefix.rstrip(".")
+        if section and not message.startswith(section):
+            message = f"{section}: {message}"
+        raise ValueError(message) from None
+
+
+def _coerce(value: Any, current: Any, name: str) -> Any:
+    """Check a leaf against its default's type. YAML writes 5 for 5.0: ints are accepted where the default is a
+    float, nothing looser (a string where a number belongs is an error naming the field)."""
+    is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if isinstance(current, bool):
+        if not isinstance(value, bool):
+            raise ValueError(f"{name} must be true or false, got {value!r}")
+    elif isinstance(current, float):
+        if not is_number:
+            raise ValueError(f"{name} must be a number, got {value!r}")
+        return float(value)
+    elif isinstance(current, int):
+        if not (isinstance(value, int) and not isinstance(value, bool)):
+            raise ValueError(f"{name} must be an integer, got {value!r}")
+    elif isinstance(current, str) and not isinstance(value, str):
+        raise ValueError(f"{name} must be a string, got {value!r}")
+    return value

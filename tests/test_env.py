@@ -1,0 +1,350 @@
+"""EKFSLAM envs: API conformance across the registry, determinism, rewards, consistency, errors."""
+
+import math
+import pickle
+import subprocess
+import sys
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from scipy import stats
+
+import ekfslam_gym  # noqa: F401  (registers the envs)
+from ekfslam_gym.envs import PRESETS, EKFSLAMEnv, EnvConfig
+
+ENV_IDS = sorted(PRESETS)
+
+
+def rollout(env, seed, steps, action_seed=0):
+    """Observations, rewards and true poses of a seeded random-action rollout."""
+    obs, info = env.reset(seed=seed)
+    rng = np.random.default_rng(action_seed)
+    trace = [obs.tobytes(), info["log_det"]]
+    for _ in range(steps):
+        obs, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, 2).astype(np.float32))
+        trace += [obs.tobytes(), reward, tuple(info["true_pose"]), terminated, truncated]
+        if terminated or truncated:
+            obs, info = env.reset()
+            trace.append(obs.tobytes())
+    return trace
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_gymnasium_env_checker(env_id):
+    from gymnasium.utils.env_checker import check_env
+
+    env = gym.make(env_id)
+    check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_sb3_env_checker(env_id):
+    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
+    sb3_checker.check_env(gym.make(env_id).unwrapped, warn=True)
+
+
+def test_both_make_spellings_and_dict_observations():
+    assert isinstance(gym.make("ekfslam_gym:EKFSLAM-v0").unwrapped, EKFSLAMEnv)
+    env = gym.make("EKFSLAM-v0", observation={"kind": "dict"})
+    obs, _ = env.reset(seed=1)
+    assert isinstance(obs, dict) and env.observation_space.contains(obs)
+    flat = gym.make("EKFSLAM-v0")
+    flat_obs, _ = flat.reset(seed=1)
+    np.testing.assert_array_equal(np.concatenate(list(obs.values())), flat_obs)
+    from gymnasium.utils.env_checker import check_env
+
+    check_env(env.unwrapped, skip_render_check=True)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_same_seed_gives_bit_identical_rollouts(env_id):
+    assert rollout(gym.make(env_id), 3, 150) == rollout(gym.make(env_id), 3, 150)
+    assert rollout(gym.make(env_id), 3, 20) != rollout(gym.make(env_id), 4, 20)
+
+
+def test_rollouts_are_identical_in_two_processes():
+    code = (
+        "import hashlib, gymnasium as gym, numpy as np, ekfslam_gym;"
+        "env = gym.make('EKFSLAM-v0'); obs, _ = env.reset(seed=7); rng = np.random.default_rng(1); h = hashlib.sha256();"
+        "exec('for _ in range(200):\\n o, r, te, tr, i = env.step(rng.uniform(-1, 1, 2).astype(np.float32))\\n"
+        " h.update(o.tobytes()); h.update(np.float64(r).tobytes())');"
+        "print(h.hexdigest())"
+    )
+    digests = {subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+               for _ in range(2)}  # fmt: skip
+    assert len(digests) == 1 and len(next(iter(digests)).strip()) == 64
+
+
+def test_pickle_mid_episode_continues_identically():
+    env = EKFSLAMEnv()
+    env.reset(seed=5)
+    rng = np.random.default_rng(2)
+    for _ in range(60):
+        env.step(rng.uniform(-1, 1, 2))
+    clone = pickle.loads(pickle.dumps(env))
+    actions = rng.uniform(-1, 1, (100, 2))
+    for action in actions:
+        a = env.step(action)
+        b = clone.step(action)
+        np.testing.assert_array_equal(a[0], b[0])
+        assert a[1:4] == b[1:4]
+
+
+def test_reward_is_the_sum_of_its_terms_and_information_gain_telescopes():
+    env = EKFSLAMEnv(reward={"collision": 0.5, "control_effort": 0.1, "a_opt": 0.3})
+    _, info = env.reset(seed=2)
+    log_det_0 = info["log_det"]
+    rng = np.random.default_rng(0)
+    gains, truncated, terminated = [], False, False
+    while not (terminated or truncated):
+        _, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, 2))
+        assert reward == pytest.approx(sum(info["reward_terms"].values()), abs=1e-12)
+        assert set(info["reward_terms"]) <= {"info_gain", "a_opt", "collision", "control_effort"}
+        gains.append(info["reward_terms"]["info_gain"])
+    assert sum(gains) == pytest.approx(log_det_0 - info["log_det"], abs=1e-8 * max(1, abs(log_det_0)))
+    sign, exact = np.linalg.slogdet(env.filter.cov)
+    assert sign > 0 and info["log_det"] == pytest.approx(exact, abs=1e-8 * max(1.0, abs(exact)))
+
+
+def test_reset_info_carries_the_log_det_of_the_first_corrected_belief():
+    env = EKFSLAMEnv()
+    _, info = env.reset(seed=11)
+    assert info["log_det"] == pytest.approx(np.linalg.slogdet(env.filter.cov)[1], abs=1e-9)
+    assert info["landmarks_seen"] == len(info["readings"].ids) > 0
+
+
+@pytest.mark.parametrize(
+    "bad", [np.array([np.nan, 0.0]), np.array([0.0, np.inf]), np.zeros(3), np.zeros((1, 2))]
+)
+def test_bad_actions_raise_and_change_nothing(bad):
+    env = EKFSLAMEnv()
+    env.reset(seed=0)
+    env.step(np.array([0.5, 0.2]))
+    before = pickle.dumps((env.filter.mean.copy(), env.filter.cov.copy(), env.world.pose, env._t))
+    with pytest.raises(ValueError):
+        env.step(bad)
+    assert pickle.dumps((env.filter.mean.copy(), env.filter.cov.copy(), env.world.pose, env._t)) == before
+
+
+def test_out_of_range_actions_are_clipped():
+    a, b = EKFSLAMEnv(), EKFSLAMEnv()
+    a.reset(seed=4)
+    b.reset(seed=4)
+    for _ in range(10):
+        ra = a.step(np.array([7.0, -3.0]))
+        rb = b.step(np.array([1.0, -1.0]))
+        np.testing.assert_array_equal(ra[0], rb[0])
+
+
+def test_step_before_reset_is_an_error():
+    with pytest.raises(gym.error.ResetNeeded):
+        EKFSLAMEnv().step(np.zeros(2))
+
+
+@pytest.mark.parametrize(
+    "overrides, field",
+    [
+        (dict(sensor={"max_range": -1.0}), "max_range"),
+        (dict(world={"n_landmarks": 0}), "world.n_landmarks"),
+        (dict(world={"layout": "maze"}), "world.layout"),
+        (dict(reward={"info_gan": 1.0}), "reward.info_gan"),
+        (dict(filter={"landmark_prior": "big"}), "filter.landmark_prior"),
+        (dict(max_episode_steps=0), "max_episode_steps"),
+        (dict(observation={"kind": "image"}), "observation.kind"),
+    ],
+)
+def test_bad_configs_raise_errors_naming_the_field(overrides, field):
+    with pytest.raises(ValueError, match=field.replace(".", r"\.")):
+        gym.make("EKFSLAM-v0", **overrides)
+
+
+def test_yaml_configs_match_the_registered_presets():
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1] / "configs" / "env"
+    assert EnvConfig.from_yaml(root / "default.yaml") == EnvConfig()
+    for env_id, name in (("EKFSLAM-Loop-v0", "loop"), ("EKFSLAM-Large-v0", "large")):
+        from_yaml = EnvConfig.from_yaml(root / f"{name}.yaml")
+        assert from_yaml == EnvConfig.from_overrides(**PRESETS[env_id])
+        assert gym.make(env_id).unwrapped.config == from_yaml
+    assert EKFSLAMEnv(config=root / "loop.yaml").config.world.layout == "loop"
+
+
+def test_large_variant_has_at_least_100_landmarks_and_truncates_at_its_own_limit():
+    env = gym.make("EKFSLAM-Large-v0")
+    env.reset(seed=0)
+    assert env.unwrapped.filter.n_landmarks >= 100
+    short = gym.make("EKFSLAM-v0", max_episode_steps=7)
+    short.reset(seed=0)
+    flags = [short.step(np.zeros(2))[3] for _ in range(7)]
+    assert flags == [False] * 6 + [True]
+
+
+def test_driving_into_a_wall_is_reported_penalised_and_optionally_terminates():
+    env = EKFSLAMEnv(reward={"collision": 2.0})
+    env.reset(seed=0)
+    hits = []
+    for _ in range(400):
+        _, _, terminated, truncated, info = env.step(np.array([1.0, 0.0]))
+        if info["collision"]:
+            hits.append(info["reward_terms"]["collision"])
+        assert not terminated
+    assert hits and all(h == -2.0 for h in hits)
+    strict = EKFSLAMEnv(terminate_on_collision=True)
+    strict.reset(seed=0)
+    for _ in range(400):
+        _, _, terminated, _, info = strict.step(np.array([1.0, 0.0]))
+        if terminated:
+            break
+    assert terminated and info["collision"]
+
+
+def test_vector_envs_autoreset_reinitialises_the_belief():
+    from gymnasium.vector import AutoresetMode
+
+    envs = gym.make_vec("EKFSLAM-v0", num_envs=2, vectorization_mode="sync", max_episode_steps=5,
+                        vector_kwargs={"autoreset_mode": AutoresetMode.NEXT_STEP})  # fmt: skip
+    _, info0 = envs.reset(seed=[1, 2])
+    for _ in range(5):
+        _, _, _, truncated, info = envs.step(np.zeros((2, 2), dtype=np.float32))
+    assert truncated.all()
+    _, _, _, _, info = envs.step(np.zeros((2, 2), dtype=np.float32))  # the autoreset step
+    for i, sub in enumerate(envs.envs):
+        ekf = sub.unwrapped.filter
+        assert sub.unwrapped._t == 0 and info["step"][i] == 0
+        assert info["log_det"][i] == pytest.approx(np.linalg.slogdet(ekf.cov)[1], abs=1e-9)
+        assert info["log_det"][i] > info0["log_det"][i] - 50  # a fresh belief, not the 5-step-old one
+        assert ekf.observed.sum() == info["landmarks_seen"][i]
+    envs.close()
+
+
+def test_subproc_vec_env_runs():
+    sb3_vec = pytest.importorskip("stable_baselines3.common.vec_env")
+    from stable_baselines3.common.env_util import make_vec_env
+
+    venv = make_vec_env("ekfslam_gym:EKFSLAM-v0", n_envs=2, seed=0, vec_env_cls=sb3_vec.SubprocVecEnv,
+                        env_kwargs={"max_episode_steps": 4})  # fmt: skip
+    obs = venv.reset()
+    assert obs.shape == (2, 122)
+    ended = []
+    for _ in range(6):
+        obs, rewards, dones, infos = venv.step(np.zeros((2, 2), dtype=np.float32))
+        ended.append(dones.copy())
+        assert np.isfinite(obs).all() and np.isfinite(rewards).all()
+    assert np.array_equal(np.array(ended).any(axis=1), [False, False, False, True, False, False])
+    assert infos[0]["step"] == 2  # counting again in the new episode
+    venv.close()
+
+
+def test_pose_anees_under_random_driving_is_consistent():
+    """50 seeded random drives: the simulator's odometry noise and the filter's motion noise agree."""
+    runs, steps = 50, 200
+    nees = np.zeros((runs, steps))
+    for run in range(runs):
+        env = EKFSLAMEnv(max_episode_steps=steps)
+        env.reset(seed=100 + run)
+        rng = np.random.default_rng(run)
+        action = rng.uniform(-1, 1, 2)
+        for t in range(steps):
+            if t % 10 == 0:
+                action = rng.uniform(-1, 1, 2)
+            *_, info = env.step(action)
+            nees[run, t] = info["pose_nees"]
+    anees = nees.mean(axis=0)
+    low, high = stats.chi2.ppf([0.025, 0.975], 3 * runs) / runs
+    inside = np.mean((anees >= low) & (anees <= high))
+    assert inside >= 0.75, f"{inside:.0%} of steps inside [{low:.2f}, {high:.2f}], mean {anees.mean():.2f}"
+    assert 2.4 <= anees.mean() <= 3.6
+
+
+def test_readings_never_cross_a_wall():
+    from ekfslam_gym.sim.geometry import segment_blocked
+
+    env = EKFSLAMEnv(world={"layout": "rooms"})
+    env.reset(seed=3)
+    rng = np.random.default_rng(0)
+    layout = env.world.layout
+    count = 0
+    for _ in range(300):
+        *_, info = env.step(rng.uniform(-1, 1, 2))
+        x, y, _ = info["true_pose"]
+        for j in info["readings"].ids:
+            lx, ly = layout.landmarks[j]
+            assert not segment_blocked(x, y, lx, ly, layout.walls, layout.wall_radius)
+            count += 1
+    assert count > 50
+
+
+def test_filter_failure_terminates_without_raising():
+    env = EKFSLAMEnv()
+    env.reset(seed=0)
+    env.filter._cov[:] = -np.eye(env.filter.state_size)
+    env.filter._tracking = True
+    _, reward, terminated, truncated, info = env.step(np.zeros(2))
+    assert terminated and not truncated and info["filter_failed"] and reward == 0.0
+
+
+@pytest.mark.slow
+def test_covariance_stays_symmetric_positive_definite_over_100k_random_steps():
+    env = EKFSLAMEnv(max_episode_steps=100_000, done_std=0.0)
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-1, 1, (100_000, 2))
+    for t, action in enumerate(actions):
+        _, _, terminated, truncated, info = env.step(action)
+        assert not info["filter_failed"]
+        if t % 20_000 == 0 or t == len(actions) - 1:
+            cov = env.filter.cov
+            assert np.array_equal(cov, cov.T)
+            assert np.all(np.isfinite(cov)) and np.linalg.eigvalsh(cov)[0] > 0
+            assert info["log_det"] == pytest.approx(
+                np.linalg.slogdet(cov)[1], abs=1e-8 * max(1, abs(info["log_det"]))
+            )
+    assert truncated
+
+
+def test_rgb_array_render_is_a_non_blank_frame():
+    pytest.importorskip("pygame")
+    env = gym.make("EKFSLAM-v0", render_mode="rgb_array")
+    env.reset(seed=0)
+    for _ in range(5):
+        env.step(np.array([0.5, 0.3]))
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.shape == (640, 640, 3)
+    assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 5
+    env.close()
+
+
+def test_observations_stay_inside_the_space_and_are_finite():
+    env = EKFSLAMEnv(world={"layout": "loop"})
+    obs, _ = env.reset(seed=9)
+    rng = np.random.default_rng(9)
+    for _ in range(300):
+        obs, *_ = env.step(rng.uniform(-1, 1, 2))
+        assert env.observation_space.contains(obs) and np.isfinite(obs).all()
+    assert math.isclose(obs[-64:].max(), 1.0)
+
+
+def test_docs_page_is_generated_from_the_current_docstring():
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "docs" / "generate.py"
+    result = subprocess.run([sys.executable, str(script), "--check"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+
+
+def test_discovery_reward_matches_the_documented_formula():
+    env = EKFSLAMEnv()
+    env.reset(seed=0)
+    ekf = env.filter.copy()
+    unseen = int(np.flatnonzero(~ekf.observed)[0])
+    r = 3.0
+    before = ekf.log_det
+    ekf.correct([unseen], [[r, 0.0]])
+    sensor = env.config.sensor
+    expected = math.log(
+        env.config.filter.landmark_prior**2 / (r**2 * sensor.range_std**2 * sensor.bearing_std**2)
+    )
+    assert before - ekf.log_det == pytest.approx(expected, rel=1e-9)
