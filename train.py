@@ -176,7 +176,8 @@ def save_checkpoint(model, folder: Path, steps: int) -> None:
 
     stem = folder / f"ppo_{steps}_steps"
     save_with_stats(model, stem)
-    state = {"python": random.getstate(), "numpy": np.random.get_state(), "torch": torch.get_rng_state()}
+    # SB3 draws from the legacy global numpy RNG, so that is the state to keep.
+    state = {"python": random.getstate(), "numpy": np.random.get_state(), "torch": torch.get_rng_state()}  # noqa: NPY002
     with open(str(stem) + "_rng.pkl", "wb") as handle:
         pickle.dump(state, handle)
 
@@ -298,7 +299,7 @@ def main(argv: list[str] | None = None) -> Path:
         with open(str(path)[: -len(".zip")] + "_rng.pkl", "rb") as handle:
             state = pickle.load(handle)
         random.setstate(state["python"])
-        np.random.set_state(state["numpy"])
+        np.random.set_state(state["numpy"])  # noqa: NPY002
         torch.set_rng_state(state["torch"])
         remaining = total - done
         reset = False
