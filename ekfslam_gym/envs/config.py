@@ -126,17 +126,26 @@ class RewardConfig:
 @dataclass(frozen=True)
 class ObservationConfig:
     """What the observation holds. kind: ``box`` (one flat float32 vector) or ``dict`` (named parts).
-    k_nearest: landmark slots, the seen landmarks nearest the pose estimate, nearest first. grid: cells per
-    side of the coverage grid over the world's bounds (where the sensor has already looked)."""
+
+    k_nearest: landmark slots, the seen landmarks nearest the pose estimate, nearest first.
+    grid, grid_extent: the coverage part is a grid x grid window centred on the pose estimate and turned with
+    its heading, reaching grid_extent m to each side, read from a coverage memory of the world kept at
+    memory_resolution m per cell (where the sensor has already looked). An MLP reads "unexplored, ahead on the
+    left" from a robot-centred window far more easily than from a world-fixed map plus the pose.
+    """
 
     kind: str = "box"
     k_nearest: int = 8
-    grid: int = 8
+    grid: int = 9
+    grid_extent: float = 9.0
+    memory_resolution: float = 0.5
 
     def __post_init__(self) -> None:
         _require(self.kind in ("box", "dict"), "observation.kind", "must be box|dict", self.kind)
         _integer("observation.k_nearest", self.k_nearest, 1)
         _integer("observation.grid", self.grid, 1)
+        _positive("observation.grid_extent", self.grid_extent)
+        _positive("observation.memory_resolution", self.memory_resolution)
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from ..sim.layouts import make_layout
 from ..sim.world import World
 from ..slam.ekf import EKFSLAM, FilterDivergedError
 from .config import EnvConfig
-from .observation import CLIP, fill_observation, mark_coverage, observation_layout
+from .observation import CLIP, fill_observation, make_memory, mark_coverage, observation_layout
 
 REWARD_TERMS = ("info_gain", "a_opt", "e_opt", "collision", "control_effort", "step_cost")
 
@@ -86,8 +86,8 @@ class EKFSLAMEnv(gym.Env):
     ``ValueError`` and change nothing.
 
     ## Observation Space
-    ``Box(-5, 5, (D,), float32)`` with D = 4 + 3 + 4k + 3 + B + G^2 (122 by default: k = 8 landmark slots,
-    B = 16 scan beams, an 8 x 8 coverage grid), or with ``observation.kind = "dict"`` a ``Dict`` of the same
+    ``Box(-5, 5, (D,), float32)`` with D = 4 + 3 + 4k + 3 + B + G^2 (139 by default: k = 8 landmark slots,
+    B = 16 scan beams, a 9 x 9 robot-centred window of the coverage memory), or with ``observation.kind = "dict"`` a ``Dict`` of the same
     parts: ``pose``, ``pose_cov``, ``landmarks``, ``globals``, ``scan``, ``coverage`` (see
     ``ekfslam_gym.envs.observation`` for every entry and its normalisation).
 
@@ -195,7 +195,7 @@ class EKFSLAMEnv(gym.Env):
         )
         self._half_size = 0.5 * max(self._bounds[2] - self._bounds[0], self._bounds[3] - self._bounds[1])
         self._true_landmarks = np.ascontiguousarray(layout.landmarks, dtype=np.float64)
-        self._coverage = np.zeros((cfg.observation.grid, cfg.observation.grid))
+        self._memory = make_memory(self._bounds, cfg.observation.memory_resolution)
         self._last_seen = np.full(layout.n_landmarks, -1, dtype=np.int64)
         self._t = 0
         self._loop_closures = 0
@@ -304,7 +304,8 @@ class EKFSLAMEnv(gym.Env):
 
     def _mark_and_trail(self) -> None:
         sensor = self.config.sensor
-        mark_coverage(self._coverage, self._ekf._mean, self._bounds, sensor.max_range, sensor.fov)
+        resolution = self.config.observation.memory_resolution
+        mark_coverage(self._memory, self._ekf._mean, self._bounds, resolution, sensor.max_range, sensor.fov)
         if self.render_mode is not None:
             pose = self._world._pose
             self._trail_true.append((pose[0], pose[1]))
@@ -313,10 +314,11 @@ class EKFSLAMEnv(gym.Env):
     def _observation(self):
         ekf, cfg = self._ekf, self.config
         time_left = max(0.0, 1.0 - self._t / cfg.max_episode_steps)
+        obs = cfg.observation
         fill_observation(
-            self._obs, ekf._mean, ekf._cov, ekf._observed, self._log_det, ekf._P, self._world.scan(), self._coverage,
-            self._centre, self._half_size, cfg.sensor.max_range, cfg.sensor.scan_max_range, time_left,
-            cfg.observation.k_nearest,
+            self._obs, ekf._mean, ekf._cov, ekf._observed, self._log_det, ekf._P, self._world.scan(), self._memory,
+            self._bounds, obs.memory_resolution, obs.grid, obs.grid_extent, self._centre, self._half_size,
+            cfg.sensor.max_range, cfg.sensor.scan_max_range, time_left, obs.k_nearest,
         )  # fmt: skip
         return self._obs_out()
 

@@ -12,8 +12,11 @@ landmarks  4 k    the k seen landmarks nearest the pose estimate, nearest first:
                   slots beyond the seen landmarks are all zero
 globals    3      mean ln variance of the map (ln det Sigma_mm / 2n / 10), fraction of landmarks seen, time left
 scan       B      wall distances along B beams fixed to the robot / scan_max_range (1 = nothing within range)
-coverage   G*G    1 where the sensor has looked (cell centre within range and field of view of the pose
-                  *estimate* at some step; walls ignored, the belief has none), row-major from (xmin, ymin)
+coverage   G*G    a robot-centred window, turned with the estimated heading and reaching grid_extent m each
+                  side, of the coverage memory: 1 where the sensor has looked (a memory cell whose centre was
+                  within range and field of view of the pose *estimate* at some step; walls ignored, the
+                  belief has none) or outside the world, else 0. Row-major: row 0 is furthest to the left,
+                  column 0 furthest behind, so the robot faces along the rows towards the last column
 ========== ====== ================================================================================================
 
 Everything is computed by one compiled kernel writing into a preallocated vector: the env is stepped millions
@@ -59,27 +62,38 @@ def _clip(value: float) -> float:
     return value
 
 
+def make_memory(bounds: np.ndarray, resolution: float) -> np.ndarray:
+    """An empty coverage memory over the world's bounds, ``resolution`` m per cell, rows along y."""
+    cols = max(1, int(math.ceil((bounds[2] - bounds[0]) / resolution)))
+    rows = max(1, int(math.ceil((bounds[3] - bounds[1]) / resolution)))
+    return np.zeros((rows, cols))
+
+
 @njit(cache=True)
-def mark_coverage(coverage, pose, bounds, max_range, fov):
-    """Set the coverage cells whose centres lie within max_range and the field of view of ``pose``."""
-    grid = coverage.shape[0]
-    cell_w = (bounds[2] - bounds[0]) / grid
-    cell_h = (bounds[3] - bounds[1]) / grid
+def mark_coverage(memory, pose, bounds, resolution, max_range, fov):
+    """Set the memory cells whose centres lie within max_range and the field of view of ``pose``.
+
+    Walls are ignored: the belief holds none, so the memory records where the sensor pointed, not what it saw.
+    Only the footprint's bounding box is visited.
+    """
+    rows, cols = memory.shape
     half_fov = 0.5 * fov
-    for row in range(grid):
-        cy = bounds[1] + (row + 0.5) * cell_h
-        for col in range(grid):
-            if coverage[row, col]:
+    c0 = max(0, int((pose[0] - max_range - bounds[0]) / resolution))
+    c1 = min(cols - 1, int((pose[0] + max_range - bounds[0]) / resolution))
+    r0 = max(0, int((pose[1] - max_range - bounds[1]) / resolution))
+    r1 = min(rows - 1, int((pose[1] + max_range - bounds[1]) / resolution))
+    range2 = max_range * max_range
+    for row in range(r0, r1 + 1):
+        dy = bounds[1] + (row + 0.5) * resolution - pose[1]
+        for col in range(c0, c1 + 1):
+            if memory[row, col]:
                 continue
-            cx = bounds[0] + (col + 0.5) * cell_w
-            dx = cx - pose[0]
-            dy = cy - pose[1]
-            if dx * dx + dy * dy > max_range * max_range:
+            dx = bounds[0] + (col + 0.5) * resolution - pose[0]
+            if dx * dx + dy * dy > range2:
                 continue
-            bearing = math.atan2(dy, dx) - pose[2]
-            bearing = (bearing + math.pi) % (2.0 * math.pi) - math.pi
+            bearing = (math.atan2(dy, dx) - pose[2] + math.pi) % (2.0 * math.pi) - math.pi
             if abs(bearing) <= half_fov:
-                coverage[row, col] = 1.0
+                memory[row, col] = 1.0
 
 
 @njit(cache=True)
@@ -91,7 +105,11 @@ def fill_observation(
     log_det,
     pose_given_map,
     scan,
-    coverage,
+    memory,
+    bounds,
+    resolution,
+    grid,
+    extent,
     centre,
     half_size,
     max_range,
@@ -150,7 +168,19 @@ def fill_observation(
     for b in range(scan.shape[0]):
         out[o + b] = min(scan[b] / scan_max, 1.0)
     o += scan.shape[0]
-    grid = coverage.shape[0]
+    # Robot-centred window: cell (row, col) sits at (forward, left) offsets in the robot frame; outside the
+    # world counts as looked at (there is nothing to find there).
+    rows, cols = memory.shape
+    cell = 2.0 * extent / grid
     for row in range(grid):
+        left = extent - (row + 0.5) * cell
         for col in range(grid):
-            out[o + row * grid + col] = coverage[row, col]
+            forward = -extent + (col + 0.5) * cell
+            wx = x + c * forward - s * left
+            wy = y + s * forward + c * left
+            mc = int(math.floor((wx - bounds[0]) / resolution))
+            mr = int(math.floor((wy - bounds[1]) / resolution))
+            if 0 <= mr < rows and 0 <= mc < cols:
+                out[o + row * grid + col] = memory[mr, mc]
+            else:
+                out[o + row * grid + col] = 1.0

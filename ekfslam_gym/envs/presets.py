@@ -7,7 +7,6 @@ PRESETS: dict[str, dict] = {
     "EKFSLAM-Loop-v0": {"world": {"layout": "loop"}, "max_episode_steps": 800},
     "EKFSLAM-Large-v0": {
         "world": {"layout": "rooms", "n_landmarks": 120, "layout_kwargs": {"width": 40.0, "height": 40.0}},
-        "observation": {"grid": 12},
         "max_episode_steps": 1000,
     },
 }
