@@ -349,3 +349,24 @@ def test_discovery_reward_matches_the_documented_formula():
         env.config.filter.landmark_prior**2 / (r**2 * sensor.range_std**2 * sensor.bearing_std**2)
     )
     assert before - ekf.log_det == pytest.approx(expected, rel=1e-9)
+
+
+def test_coverage_window_is_robot_centred_and_turns_with_the_heading():
+    from ekfslam_gym.envs.observation import make_memory, mark_coverage, observation_layout
+
+    env = EKFSLAMEnv(world={"layout_kwargs": {"width": 40.0, "height": 40.0}})
+    obs, _ = env.reset(seed=0)
+    grid = env.config.observation.grid
+    window = obs[observation_layout(8, 16, grid)["coverage"]].reshape(grid, grid)
+    pose = env.filter.pose
+    # Rebuild the memory from the one pose the sensor has looked from, and read the window by hand.
+    memory = make_memory(env._bounds, 0.5)
+    mark_coverage(memory, np.array(pose), env._bounds, 0.5, env.config.sensor.max_range, env.config.sensor.fov)
+    assert np.array_equal(memory, env._memory)
+    centre = grid // 2
+    assert window[centre, centre + 2] == 1.0  # 4 m straight ahead: inside the 6 m, 180 degree footprint
+    ahead_left = pose[:2] + 4.0 * np.array([np.cos(pose[2] + 0.5), np.sin(pose[2] + 0.5)])
+    assert env._memory[int((ahead_left[1] - env._bounds[1]) / 0.5), int((ahead_left[0] - env._bounds[0]) / 0.5)]
+    behind = pose[:2] - 4.0 * np.array([np.cos(pose[2]), np.sin(pose[2])])
+    inside = env._bounds[0] < behind[0] < env._bounds[2] and env._bounds[1] < behind[1] < env._bounds[3]
+    assert window[centre, centre - 2] == (0.0 if inside else 1.0)  # behind: not looked at (or outside)
