@@ -1,0 +1,341 @@
+"""The env's pygame picture of an EKF-SLAM belief, in the style of the course's figure.
+
+Walls as capsules, true landmarks as black crosses, estimates of seen landmarks with their 3-sigma ellipses in
+blue, the true robot in grey and black, the estimated robot with its 3-sigma position ellipse in red, the
+step's readings as thin lines from the estimated robot, the sensor's field of view shaded faintly, and trails
+of both trajectories. A :class:`Scene` is everything that is drawn; the renderer reads it and decides nothing.
+
+pygame-ce is in the optional ``render`` extra, so it is imported only when a :class:`Renderer` is built.
+``rgb_array`` draws on a plain ``pygame.Surface`` and never touches ``pygame.display``, so it runs headless.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["RENDER_MODES", "Scene", "Renderer", "ellipse_points"]
+
+RENDER_MODES = ("rgb_array", "human")
+SIGMAS = 3.0  # ellipses at 3 sigma, as in the course figure
+ELLIPSE_POINTS = 24
+ARC_POINTS = 32  # points on the field-of-view arc
+PAD = 8  # [px] around the world
+TEXT_BAND = 20  # [px] at the top, kept whether or not there is text so the map never shifts
+PX_LIMIT = 1.0e5  # [px] coordinates are clamped here so absurd estimates cannot overflow pygame's ints
+
+BACKGROUND = (255, 255, 255)
+BOUNDS = (215, 215, 215)
+FOV_FILL = (255, 240, 230)
+FOV_EDGE = (245, 205, 190)
+WALL = (110, 110, 110)
+TRUE = (0, 0, 0)
+TRUE_BODY = (165, 165, 165)
+TRUE_TRAIL = (120, 120, 120)
+EST = (210, 30, 30)
+EST_TRAIL = (235, 140, 140)
+LANDMARK_EST = (30, 80, 220)
+READING = (90, 90, 90)
+TEXT = (20, 20, 20)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Everything one frame draws, in world coordinates (m, rad); built by the env from its state."""
+
+    bounds: np.ndarray  # (4,) xmin, ymin, xmax, ymax in m
+    walls: np.ndarray  # (k, 4) segments x1, y1, x2, y2 (m)
+    wall_radius: float  # m
+    robot_radius: float  # m
+    landmarks_true: np.ndarray  # (n, 2)
+    landmarks_est: np.ndarray  # (n, 2)
+    landmark_covs: np.ndarray  # (n, 2, 2) marginal covariances
+    seen: np.ndarray  # (n,) bool: draw estimates/ellipses only for these
+    pose_true: np.ndarray  # (3,) x, y, theta
+    pose_est: np.ndarray  # (3,)
+    pose_cov: np.ndarray  # (3, 3)
+    read_ids: np.ndarray  # (m,) int: landmarks read this step
+    trail_true: np.ndarray  # (T, 2)
+    trail_est: np.ndarray  # (T, 2)
+    max_range: float
+    fov: float  # rad, full field of view
+    text: str = ""
+
+
+def ellipse_points(
+    centres: np.ndarray, covs: np.ndarray, sigmas: float = SIGMAS, n: int = ELLIPSE_POINTS
+) -> tuple[np.ndarray, np.ndarray]:
+    """Polygons of the ``sigmas`` ellipses of 2x2 covariances, all at once.
+
+    Returns ``(points, valid)``: points ``(len(covs), n, 2)`` in the centres' units and a mask of the
+    covariances that make an ellipse (finite, positive semidefinite once symmetrised, not all zero), so a
+    filter's bad or degenerate block is skipped instead of crashing the frame or drawing garbage.
+    """
+    centres = np.asarray(centres, dtype=float).reshape(-1, 2)
+    covs = np.asarray(covs, dtype=float).reshape(-1, 2, 2)
+    points = np.zeros((len(covs), n, 2))
+    valid = np.isfinite(covs).all(axis=(1, 2)) & np.isfinite(centres).all(axis=1)
+    if not valid.any():
+        return points, valid
+    sym = 0.5 * (covs[valid] + np.swapaxes(covs[valid], 1, 2))
+    values, vectors = np.linalg.eigh(sym)  # ascending, per covariance
+    scale = np.abs(values).max(axis=1)
+    ok = (scale > 0) & (values[:, 0] >= -1e-9 * scale)
+    idx = np.flatnonzero(valid)
+    valid[idx[~ok]] = False
+    radii = sigmas * np.sqrt(np.clip(values[ok], 0.0, None))  # (v, 2) semi-axes
+    angles = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    circle = np.stack([np.cos(angles), np.sin(angles)], axis=1)  # (n, 2)
+    # x = c + V diag(r) u for each unit-circle point u
+    points[idx[ok]] = centres[idx[ok], None, :] + np.einsum("vij,vj,nj->vni", vectors[ok], radii, circle)
+    return points, valid
+
+
+class Renderer:
+    """Draws :class:`Scene` frames for ``render_mode`` ``"rgb_array"`` (returns an image) or ``"human"``."""
+
+    def __init__(self, render_mode: str, width: int = 640, height: int = 640, fps: int = 10) -> None:
+        if render_mode not in RENDER_MODES:
+            raise ValueError(f"render_mode must be one of {list(RENDER_MODES)}, got {render_mode!r}")
+        if width < 2 * PAD + 1 or height < 2 * PAD + TEXT_BAND + 1:
+            raise ValueError(f"width and height are too small for a picture, got {width}x{height}")
+        os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+        try:
+            import pygame
+        except ImportError as error:  # the render extra is optional
+            raise ImportError('rendering needs pygame-ce: pip install "ekfslam-gym[render]"') from error
+        self._pg: Any = pygame
+        self.render_mode = render_mode
+        self.width = int(width)
+        self.height = int(height)
+        self.fps = int(fps)
+        self._surface = pygame.Surface((self.width, self.height))
+        self._font: Any = None
+        self._font_tried = False
+        self._window: Any = None
+        self._clock: Any = None
+        self._scale, self._ox, self._oy = 1.0, 0.0, 0.0  # set from the scene's bounds on every frame
+
+    # -- geometry ------------------------------------------------------------------------------------------
+
+    def _transform(self, bounds: np.ndarray) -> tuple[float, float, float]:
+        """Scale (px/m) and the pixel position of world (0, 0), keeping aspect ratio, centred, y up."""
+        b = np.asarray(bounds, dtype=float).reshape(-1)
+        if b.shape != (4,) or not np.isfinite(b).all() or b[2] <= b[0] or b[3] <= b[1]:
+            raise ValueError(f"bounds must be finite (xmin, ymin, xmax, ymax) with max > min, got {bounds!r}")
+        avail_w = self.width - 2 * PAD
+        avail_h = self.height - 2 * PAD - TEXT_BAND
+        scale = min(avail_w / (b[2] - b[0]), avail_h / (b[3] - b[1]))
+        left = PAD + 0.5 * (avail_w - scale * (b[2] - b[0]))
+        bottom = self.height - PAD - 0.5 * (avail_h - scale * (b[3] - b[1]))
+        return float(scale), float(left - scale * b[0]), float(bottom + scale * b[1])
+
+    def _px(self, xy: np.ndarray) -> np.ndarray:
+        """World points (..., 2) in m to pixel coordinates (..., 2), clamped to a sane range."""
+        xy = np.asarray(xy, dtype=float)
+        out = np.empty_like(xy)
+        out[..., 0] = self._ox + self._scale * xy[..., 0]
+        out[..., 1] = self._oy - self._scale * xy[..., 1]
+        return np.clip(out, -PX_LIMIT, PX_LIMIT)
+
+    def world_to_pixels(self, bounds: np.ndarray, xy: np.ndarray) -> np.ndarray:
+        """Pixel (column, row) of world points (..., 2) in m for a scene with these ``bounds``, for overlays."""
+        self._scale, self._ox, self._oy = self._transform(bounds)
+        return self._px(xy)
+
+    # -- drawing -------------------------------------------------------------------------------------------
+
+    def render(self, scene: Scene) -> np.ndarray | None:
+        """Draw ``scene``; ``rgb_array`` returns an (height, width, 3) uint8 image, ``human`` shows it."""
+        self._draw(scene)
+        if self.render_mode == "rgb_array":
+            # Row-major RGB bytes are already (H, W, 3): 10x cheaper than surfarray.array3d + transpose,
+            # and a bytearray keeps the returned frame writable like any other numpy array.
+            data = bytearray(self._pg.image.tobytes(self._surface, "RGB"))
+            return np.frombuffer(data, dtype=np.uint8).reshape(self.height, self.width, 3)
+        self._show()
+        return None
+
+    def _draw(self, scene: Scene) -> None:
+        pg = self._pg
+        surf = self._surface
+        self._scale, self._ox, self._oy = self._transform(scene.bounds)
+        surf.fill(BACKGROUND)
+        b = np.asarray(scene.bounds, dtype=float)
+        corners = self._px(np.array([[b[0], b[3]], [b[2], b[1]]]))
+        pg.draw.rect(surf, BOUNDS, pg.Rect(*corners[0], *(corners[1] - corners[0])), width=1)
+
+        pose_est = np.asarray(scene.pose_est, dtype=float)
+        pose_true = np.asarray(scene.pose_true, dtype=float)
+        est_ok = pose_est.shape == (3,) and bool(np.isfinite(pose_est).all())
+        true_ok = pose_true.shape == (3,) and bool(np.isfinite(pose_true).all())
+
+        if est_ok:
+            self._draw_fov(pose_est, float(scene.max_range), float(scene.fov))
+        self._draw_walls(np.asarray(scene.walls, dtype=float).reshape(-1, 4), float(scene.wall_radius))
+        self._draw_trail(scene.trail_true, TRUE_TRAIL)
+        self._draw_trail(scene.trail_est, EST_TRAIL)
+
+        landmarks_est = np.asarray(scene.landmarks_est, dtype=float).reshape(-1, 2)
+        seen = np.asarray(scene.seen, dtype=bool).reshape(-1)
+        if est_ok:
+            self._draw_readings(pose_est, landmarks_est, np.asarray(scene.read_ids).reshape(-1))
+        self._draw_landmarks_true(np.asarray(scene.landmarks_true, dtype=float).reshape(-1, 2))
+        self._draw_landmarks_est(landmarks_est, np.asarray(scene.landmark_covs, dtype=float), seen)
+
+        radius = max(2.0, self._scale * float(scene.robot_radius))
+        if true_ok:
+            centre = self._px(pose_true[:2])
+            pg.draw.circle(surf, TRUE_BODY, centre, radius)
+            pg.draw.circle(surf, TRUE, centre, radius, width=1)
+            self._heading(pose_true, radius, TRUE)
+        if est_ok:
+            pose_cov = np.asarray(scene.pose_cov, dtype=float)
+            if pose_cov.shape == (3, 3):
+                points, valid = ellipse_points(pose_est[:2], pose_cov[:2, :2])
+                if valid[0]:
+                    pg.draw.aalines(surf, EST, True, self._px(points[0]).tolist())
+            centre = self._px(pose_est[:2])
+            pg.draw.circle(surf, EST, centre, radius, width=2)
+            self._heading(pose_est, radius, EST)
+
+        if scene.text:
+            self._draw_text(str(scene.text))
+
+    def _draw_fov(self, pose: np.ndarray, max_range: float, fov: float) -> None:
+        """The sensor's wedge around the estimated heading: where the robot believes it can see.
+
+        The radius is capped just past the canvas's farthest corner: the picture is the same, and pygame's
+        fills take seconds on coordinates in the millions.
+        """
+        if not (max_range > 0 and math.isfinite(fov) and fov > 0):  # also rejects NaN
+            return
+        pg = self._pg
+        centre = self._px(pose[:2])
+        corners = np.array([[0.0, 0.0], [self.width, 0.0], [0.0, self.height], [self.width, self.height]])
+        r_visible = 1.1 * float(np.hypot(*(corners - centre).T).max()) + 8.0
+        r_px = min(self._scale * max_range, r_visible)
+        if fov >= 2.0 * math.pi - 1e-9:
+            pg.draw.circle(self._surface, FOV_FILL, centre, r_px)
+            pg.draw.circle(self._surface, FOV_EDGE, centre, r_px, width=1)
+            return
+        angles = pose[2] + np.linspace(-0.5 * fov, 0.5 * fov, ARC_POINTS)
+        arc = centre + r_px * np.stack([np.cos(angles), -np.sin(angles)], axis=1)  # rows grow downwards
+        points = np.vstack([centre[None], arc]).tolist()
+        pg.draw.polygon(self._surface, FOV_FILL, points)
+        pg.draw.lines(self._surface, FOV_EDGE, True, points)
+
+    def _draw_walls(self, walls: np.ndarray, wall_radius: float) -> None:
+        """Capsules: a quad per segment plus round caps, so corners meet like the collision shapes."""
+        walls = walls[np.isfinite(walls).all(axis=1)]
+        if len(walls) == 0:
+            return
+        pg = self._pg
+        surf = self._surface
+        ends = self._px(walls.reshape(-1, 2, 2))  # (k, 2, 2) px
+        r_px = self._scale * wall_radius if math.isfinite(wall_radius) else 0.0
+        if r_px < 1.0:
+            for a, b in ends.tolist():
+                pg.draw.line(surf, WALL, a, b, 2)
+            return
+        d = ends[:, 1] - ends[:, 0]
+        length = np.hypot(d[:, 0], d[:, 1])
+        normal = np.zeros_like(d)
+        long = length > 1e-9
+        normal[long] = np.stack([-d[long, 1], d[long, 0]], axis=1) / length[long, None] * r_px
+        quads = np.stack(
+            [ends[:, 0] + normal, ends[:, 1] + normal, ends[:, 1] - normal, ends[:, 0] - normal], axis=1
+        )
+        for quad, (a, b), is_long in zip(quads.tolist(), ends.tolist(), long.tolist()):
+            if is_long:
+                pg.draw.polygon(surf, WALL, quad)
+            pg.draw.circle(surf, WALL, a, r_px)
+            pg.draw.circle(surf, WALL, b, r_px)
+
+    def _draw_trail(self, trail: np.ndarray, color: tuple[int, int, int]) -> None:
+        trail = np.asarray(trail, dtype=float).reshape(-1, 2)
+        trail = trail[np.isfinite(trail).all(axis=1)]
+        if len(trail) >= 2:
+            self._pg.draw.aalines(self._surface, color, False, self._px(trail).tolist())
+
+    def _draw_readings(self, pose: np.ndarray, landmarks_est: np.ndarray, read_ids: np.ndarray) -> None:
+        """Thin lines to the estimates of the landmarks read this step (ids out of range are ignored)."""
+        if read_ids.size == 0 or len(landmarks_est) == 0:
+            return
+        ids = read_ids.astype(np.int64, copy=False)
+        ids = ids[(ids >= 0) & (ids < len(landmarks_est))]
+        targets = landmarks_est[ids]
+        targets = targets[np.isfinite(targets).all(axis=1)]
+        if len(targets) == 0:
+            return
+        start = self._px(pose[:2]).tolist()
+        for end in self._px(targets).tolist():
+            self._pg.draw.aaline(self._surface, READING, start, end)
+
+    def _draw_landmarks_true(self, landmarks: np.ndarray) -> None:
+        landmarks = landmarks[np.isfinite(landmarks).all(axis=1)]
+        pg = self._pg
+        s = 4
+        for x, y in self._px(landmarks).tolist():
+            pg.draw.line(self._surface, TRUE, (x - s, y - s), (x + s, y + s), 2)
+            pg.draw.line(self._surface, TRUE, (x - s, y + s), (x + s, y - s), 2)
+
+    def _draw_landmarks_est(self, landmarks: np.ndarray, covs: np.ndarray, seen: np.ndarray) -> None:
+        """Seen estimates only: an unseen landmark's estimate and covariance are placeholders."""
+        n = min(len(landmarks), len(seen), len(covs))
+        if n == 0:
+            return
+        mask = seen[:n]
+        if not mask.any():
+            return
+        centres = landmarks[:n][mask]
+        points, valid = ellipse_points(centres, covs[:n][mask])
+        pg = self._pg
+        surf = self._surface
+        for poly in self._px(points[valid]).tolist():
+            pg.draw.aalines(surf, LANDMARK_EST, True, poly)
+        centres = centres[np.isfinite(centres).all(axis=1)]
+        for c in self._px(centres).tolist():
+            pg.draw.circle(surf, LANDMARK_EST, c, 3)
+
+    def _heading(self, pose: np.ndarray, radius: float, color: tuple[int, int, int]) -> None:
+        start = self._px(pose[:2])
+        tip = start + 1.8 * radius * np.array([math.cos(pose[2]), -math.sin(pose[2])])
+        self._pg.draw.line(self._surface, color, start.tolist(), tip.tolist(), 2)
+
+    def _draw_text(self, text: str) -> None:
+        """The text line is a convenience: without a usable font module the frame is drawn without it."""
+        if not self._font_tried:
+            self._font_tried = True
+            try:
+                self._pg.font.init()
+                self._font = self._pg.font.Font(None, 20)
+            except Exception:  # a missing font must not break rendering
+                self._font = None
+        if self._font is not None:
+            self._surface.blit(self._font.render(text, True, TEXT), (PAD, 3))
+
+    # -- window --------------------------------------------------------------------------------------------
+
+    def _show(self) -> None:
+        pg = self._pg
+        if self._window is None:
+            pg.display.init()
+            pg.display.set_caption("ekfslam-gym")
+            self._window = pg.display.set_mode((self.width, self.height))
+            self._clock = pg.time.Clock()
+        pg.event.pump()
+        self._window.blit(self._surface, (0, 0))
+        pg.display.flip()
+        self._clock.tick(self.fps)
+
+    def close(self) -> None:
+        """Close the window if one was opened; safe to call more than once and in ``rgb_array`` mode."""
+        if self._window is not None:
+            self._pg.display.quit()
+            self._window = None
+            self._clock = None
