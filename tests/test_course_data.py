@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
 import numpy as np
@@ -18,19 +17,7 @@ from ekfslam_gym.data.course import (
     write_sensor_data,
     write_world,
 )
-
-try:  # the shared helper (tests/datapaths.py); the same logic inline if it is absent
-    from tests.datapaths import freiburg_dir
-except ImportError:
-
-    def freiburg_dir() -> Path | None:
-        """The course data folder: $EKFSLAM_DATA_DIR (or its freiburg/), else ../shared/data/freiburg."""
-        candidates = []
-        if os.environ.get("EKFSLAM_DATA_DIR"):
-            root = Path(os.environ["EKFSLAM_DATA_DIR"])
-            candidates += [root, root / "freiburg"]
-        candidates.append(Path(__file__).resolve().parents[2] / "shared" / "data" / "freiburg")
-        return next((c for c in candidates if (c / "sensor_data.dat").is_file()), None)
+from tests.datapaths import freiburg_dir
 
 
 def _course_file(name: str) -> Path:

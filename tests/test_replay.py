@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,19 +10,7 @@ import pytest
 from ekfslam_gym.data.course import read_sensor_data, read_world
 from ekfslam_gym.data.drive import simulate_drive
 from ekfslam_gym.replay import main, replay
-
-try:  # the shared helper (tests/datapaths.py); the same logic inline if it is absent
-    from tests.datapaths import freiburg_dir
-except ImportError:
-
-    def freiburg_dir() -> Path | None:
-        """The course data folder: $EKFSLAM_DATA_DIR (or its freiburg/), else ../shared/data/freiburg."""
-        candidates = []
-        if os.environ.get("EKFSLAM_DATA_DIR"):
-            root = Path(os.environ["EKFSLAM_DATA_DIR"])
-            candidates += [root, root / "freiburg"]
-        candidates.append(Path(__file__).resolve().parents[2] / "shared" / "data" / "freiburg")
-        return next((c for c in candidates if (c / "sensor_data.dat").is_file()), None)
+from tests.datapaths import freiburg_dir
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,142 @@
+"""g2o text graphs, 2-D subset: VERTEX_SE2, VERTEX_XY, EDGE_SE2, EDGE_SE2_XY.
+
+    VERTEX_SE2  id x y theta
+    VERTEX_XY   id x y
+    EDGE_SE2    i j  dx dy dtheta  I11 I12 I13 I22 I23 I33   # upper triangle of the 3×3 information matrix
+    EDGE_SE2_XY i j  lx ly         I11 I12 I22               # landmark j in the frame of pose i
+
+Poses and landmarks keep the order in which their vertices appear; the first pose is the one the optimiser's gauge
+holds. Blank lines and ``#`` comments are skipped; anything else that does not parse raises ``ValueError`` naming
+the file and line.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..slam.graph import FactorGraph, GraphProblem, Values
+
+__all__ = ["read_g2o", "write_g2o"]
+
+_FIELDS = {"VERTEX_SE2": 4, "VERTEX_XY": 3, "EDGE_SE2": 11, "EDGE_SE2_XY": 7}  # values after the tag
+_UPPER3 = (np.array([0, 0, 0, 1, 1, 2]), np.array([0, 1, 2, 1, 2, 2]))
+_UPPER2 = (np.array([0, 0, 1]), np.array([0, 1, 1]))
+
+
+def read_g2o(path: str | os.PathLike[str]) -> GraphProblem:
+    """Read a 2-D g2o file into a graph, its initial values and the file's vertex ids."""
+    path = Path(path)
+    pose_index: dict[int, int] = {}
+    landmark_index: dict[int, int] = {}
+    poses: list[list[float]] = []
+    landmarks: list[list[float]] = []
+    between: list[tuple[int, int, int, list[float]]] = []  # (line, i, j, numbers)
+    pose_landmark: list[tuple[int, int, int, list[float]]] = []
+
+    def fail(line_no: int, message: str) -> ValueError:
+        return ValueError(f"{path}:{line_no}: {message}")
+
+    with open(path, encoding="utf-8") as stream:
+        for line_no, line in enumerate(stream, start=1):
+            fields = line.split("#", 1)[0].split()
+            if not fields:
+                continue
+            tag = fields[0]
+            if tag not in _FIELDS:
+                raise fail(line_no, f"unsupported tag {tag!r} (expected one of {', '.join(_FIELDS)})")
+            if len(fields) - 1 != _FIELDS[tag]:
+                raise fail(line_no, f"{tag} needs {_FIELDS[tag]} values, found {len(fields) - 1}")
+            try:
+                ids = [int(f) for f in fields[1 : 2 if tag.startswith("VERTEX") else 3]]
+                numbers = [float(f) for f in fields[1 + len(ids) :]]
+            except ValueError as exc:
+                raise fail(line_no, f"malformed {tag} line: {exc}") from None
+            if not all(math.isfinite(v) for v in numbers):
+                raise fail(line_no, f"{tag} has a non-finite value")
+            if tag.startswith("VERTEX"):
+                vid = ids[0]
+                if vid in pose_index or vid in landmark_index:
+                    raise fail(line_no, f"vertex {vid} defined twice")
+                if tag == "VERTEX_SE2":
+                    pose_index[vid] = len(poses)
+                    poses.append(numbers)
+                else:
+                    landmark_index[vid] = len(landmarks)
+                    landmarks.append(numbers)
+            elif tag == "EDGE_SE2":
+                between.append((line_no, ids[0], ids[1], numbers))
+            else:
+                pose_landmark.append((line_no, ids[0], ids[1], numbers))
+
+    def resolve(line_no: int, vid: int, table: dict[int, int], what: str) -> int:
+        if vid not in table:
+            raise fail(line_no, f"edge refers to {vid}, which is not a {what} vertex")
+        return table[vid]
+
+    graph = FactorGraph()
+    if between:
+        i = [resolve(n, a, pose_index, "VERTEX_SE2") for n, a, _, _ in between]
+        j = [resolve(n, b, pose_index, "VERTEX_SE2") for n, _, b, _ in between]
+        numbers = np.array([v for *_, v in between])
+        info = np.zeros((len(between), 3, 3))
+        info[:, _UPPER3[0], _UPPER3[1]] = numbers[:, 3:]
+        info[:, _UPPER3[1], _UPPER3[0]] = numbers[:, 3:]
+        graph.add_between(i, j, numbers[:, :3], info)
+    if pose_landmark:
+        i = [resolve(n, a, pose_index, "VERTEX_SE2") for n, a, _, _ in pose_landmark]
+        j = [resolve(n, b, landmark_index, "VERTEX_XY") for n, _, b, _ in pose_landmark]
+        numbers = np.array([v for *_, v in pose_landmark])
+        info = np.zeros((len(pose_landmark), 2, 2))
+        info[:, _UPPER2[0], _UPPER2[1]] = numbers[:, 2:]
+        info[:, _UPPER2[1], _UPPER2[0]] = numbers[:, 2:]
+        graph.add_pose_landmark(i, j, numbers[:, :2], info)
+    return GraphProblem(
+        graph,
+        Values(np.array(poses).reshape(-1, 3), np.array(landmarks).reshape(-1, 2)),
+        np.array(list(pose_index), dtype=np.int64),
+        np.array(list(landmark_index), dtype=np.int64),
+    )
+
+
+def write_g2o(
+    path: str | os.PathLike[str],
+    graph: FactorGraph,
+    values: Values,
+    pose_ids: np.ndarray | None = None,
+    landmark_ids: np.ndarray | None = None,
+) -> None:
+    """Write poses, landmarks, pose-pose and pose-landmark edges; numbers round-trip exactly (17 digits).
+
+    Ids default to 0…P−1 for poses and P…P+L−1 for landmarks. Range-bearing and prior factors have no tag in this
+    subset of the format and raise ``ValueError``.
+    """
+    for kind in ("range_bearing", "prior"):
+        if len(graph.factors(kind)):
+            raise ValueError(f"g2o (2-D subset) cannot store {kind} factors")
+    P, L = values.num_poses, values.num_landmarks
+    pose_ids = np.arange(P) if pose_ids is None else np.asarray(pose_ids)
+    landmark_ids = np.arange(P, P + L) if landmark_ids is None else np.asarray(landmark_ids)
+    if len(pose_ids) != P or len(landmark_ids) != L:
+        raise ValueError("pose_ids / landmark_ids do not match the number of poses / landmarks")
+    lines = []
+    for vid, (x, y, th) in zip(pose_ids.tolist(), values.poses.tolist()):
+        lines.append(f"VERTEX_SE2 {vid} {x!r} {y!r} {th!r}")
+    for vid, (x, y) in zip(landmark_ids.tolist(), values.landmarks.tolist()):
+        lines.append(f"VERTEX_XY {vid} {x!r} {y!r}")
+    f = graph.between
+    upper = f.information[:, _UPPER3[0], _UPPER3[1]]
+    for a, b, z, w in zip(
+        pose_ids[f.first].tolist(), pose_ids[f.second].tolist(), f.measured.tolist(), upper.tolist()
+    ):
+        lines.append(f"EDGE_SE2 {a} {b} " + " ".join(repr(v) for v in z + w))
+    f = graph.pose_landmark
+    upper = f.information[:, _UPPER2[0], _UPPER2[1]]
+    for a, b, z, w in zip(
+        pose_ids[f.first].tolist(), landmark_ids[f.second].tolist(), f.measured.tolist(), upper.tolist()
+    ):
+        lines.append(f"EDGE_SE2_XY {a} {b} " + " ".join(repr(v) for v in z + w))
+    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
