@@ -1,0 +1,43 @@
+"""Filter vs full-SLAM smoother on recorded env episodes."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import ekfslam_gym  # noqa: F401
+from agents import make_agent
+from ekfslam_gym.smoothing import EpisodeRecorder, compare_with_smoother, main, run_episode
+
+
+@pytest.mark.parametrize("seed", [10000, 10001])
+def test_smoothing_an_env_episode_beats_the_filter_on_ate(seed):
+    env = gym.make("EKFSLAM-v0")  # 500 steps: the circle closes its loop
+    recorder = run_episode(env, make_agent("circle"), seed)
+    assert len(recorder.odometry) == 500 and len(recorder.readings) == 501
+    result = compare_with_smoother(recorder, env)
+    assert result["smoother_ate"] < 0.7 * result["filter_ate"], result
+    assert result["smoother_landmark_rmse"] < 0.2
+
+
+def test_recorder_keeps_what_the_graph_needs():
+    env = gym.make("EKFSLAM-v0", max_episode_steps=5)
+    _, info = env.reset(seed=3)
+    recorder = EpisodeRecorder()
+    recorder.add(info, first=True)
+    _, _, _, _, info = env.step(np.array([0.5, 0.1], dtype=np.float32))
+    recorder.add(info)
+    assert recorder.readings[0].shape[1] == 3 and len(recorder.odometry) == 1
+    np.testing.assert_array_equal(recorder.readings[1][:, 0], info["readings"].ids)
+    velocity = gym.make("EKFSLAM-v0", filter={"motion_model": "velocity"})
+    _, info = velocity.reset(seed=0)
+    _, _, _, _, info = velocity.step(np.zeros(2, dtype=np.float32))
+    with pytest.raises(ValueError, match="odometry"):
+        recorder.add(info)
+
+
+def test_cli_prints_a_row_per_seed(capsys):
+    assert main(["--seeds", "10000-10000", "--json"]) == 0
+    import json
+
+    rows = json.loads(capsys.readouterr().out)
+    assert len(rows) == 1 and {"filter_ate", "smoother_ate"} <= set(rows[0])
