@@ -7,7 +7,6 @@ import pytest
 
 from ekfslam_gym.slam.models import (
     inverse_range_bearing,
-    odometry_from_poses,
     odometry_motion,
     range_bearing,
     velocity_motion,
@@ -81,20 +80,6 @@ def test_odometry_motion_jacobians(pose, control):
     V_num = numeric_jacobian(lambda c: odometry_motion(pose, c[0], c[1], c[2])[0], control, angle_rows=(2,))
     np.testing.assert_allclose(G, G_num, atol=1e-7)
     np.testing.assert_allclose(V, V_num, atol=1e-7)
-
-
-def test_odometry_from_poses_inverts_the_motion_and_keeps_pure_rotation_finite():
-    rng = np.random.default_rng(3)
-    for _ in range(100):
-        start = np.array([*rng.normal(size=2), rng.uniform(-math.pi, math.pi)])
-        control = (rng.uniform(-1, 1), rng.uniform(0.01, 1), rng.uniform(-1, 1))
-        end, _, _ = odometry_motion(start, *control)
-        recovered = odometry_from_poses(start, end)
-        again, _, _ = odometry_motion(start, *recovered)
-        np.testing.assert_allclose(again[:2], end[:2], atol=1e-12)
-        assert abs(wrap_angle(again[2] - end[2])) < 1e-12
-    rot1, trans, rot2 = odometry_from_poses(np.array([1.0, 1.0, 0.2]), np.array([1.0, 1.0, 0.9]))
-    assert (rot1, trans) == (0.0, 0.0) and rot2 == pytest.approx(0.7)
 
 
 @pytest.mark.parametrize("pose", POSES)

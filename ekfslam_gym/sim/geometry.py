@@ -17,16 +17,9 @@ import math
 import numpy as np
 from numba import njit
 
+from ..angles import wrap_angle
+
 TWO_PI = 2.0 * math.pi
-
-
-@njit(cache=True)
-def wrap_angle(angle: float) -> float:
-    """Wrap an angle in radians to (-pi, pi]."""
-    wrapped = math.pi - (math.pi - angle) % TWO_PI
-    if wrapped <= -math.pi:
-        wrapped += TWO_PI
-    return wrapped
 
 
 @njit(cache=True)

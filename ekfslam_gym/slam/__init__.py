@@ -3,7 +3,6 @@
 from .ekf import COURSE_MEASUREMENT_NOISE, COURSE_MOTION_NOISE, EKFSLAM, FilterDivergedError
 from .models import (
     inverse_range_bearing,
-    odometry_from_poses,
     odometry_motion,
     range_bearing,
     velocity_motion,
@@ -16,7 +15,6 @@ __all__ = [
     "EKFSLAM",
     "FilterDivergedError",
     "inverse_range_bearing",
-    "odometry_from_poses",
     "odometry_motion",
     "range_bearing",
     "velocity_motion",

@@ -14,16 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
-TWO_PI = 2.0 * math.pi
-
-
-@njit(cache=True)
-def wrap_angle(angle: float) -> float:
-    """Wrap an angle in radians to (-pi, pi]."""
-    wrapped = (angle + math.pi) % TWO_PI - math.pi
-    if wrapped == -math.pi:
-        return math.pi
-    return wrapped
+from ..angles import wrap_angle
 
 
 @njit(cache=True)
@@ -99,24 +90,6 @@ def odometry_motion(pose: np.ndarray, rot1: float, trans: float, rot2: float):
     V[2, 0] = 1.0
     V[2, 2] = 1.0
     return new_pose, G, V
-
-
-@njit(cache=True)
-def odometry_from_poses(start: np.ndarray, end: np.ndarray, min_translation: float = 1e-9):
-    """The (rot1, trans, rot2) that takes ``start`` exactly to ``end``.
-
-    rot1 is the direction of travel relative to the start heading; for a pure rotation (trans below
-    ``min_translation`` metres) it is undefined, so it is set to 0 and the whole turn goes into rot2.
-    """
-    dx = end[0] - start[0]
-    dy = end[1] - start[1]
-    trans = math.sqrt(dx * dx + dy * dy)
-    if trans < min_translation:
-        rot1 = 0.0
-    else:
-        rot1 = wrap_angle(math.atan2(dy, dx) - start[2])
-    rot2 = wrap_angle(end[2] - start[2] - rot1)
-    return rot1, trans, rot2
 
 
 @njit(cache=True)

@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..angles import wrap_angles as wrap_angle  # vectorised here: every function takes stacks of poses
+
 __all__ = [
     "between",
     "compose",
@@ -18,12 +20,6 @@ __all__ = [
     "v2t",
     "wrap_angle",
 ]
-
-
-def wrap_angle(angle: ArrayLike) -> NDArray[np.float64]:
-    """Wrap angles [rad] to (−π, π]; +π stays +π and −π maps to +π."""
-    a = np.asarray(angle, dtype=float)
-    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
 
 
 def v2t(pose: ArrayLike) -> NDArray[np.float64]:
