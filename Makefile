@@ -24,7 +24,7 @@ $(STAMP): pyproject.toml | $(BIN)/python
 install: $(STAMP)
 
 demo: install
-	$(BIN)/python -m ekfslam_gym.replay --plot out/replay.png --gif out/replay.gif
+	$(BIN)/python demo.py --out out
 
 test: install
 	$(BIN)/python -m pytest

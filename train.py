@@ -242,6 +242,8 @@ def main(argv: list[str] | None = None) -> Path:
     args = parser.parse_args(argv)
 
     if args.resume is not None:
+        if not (args.resume / "config.yaml").is_file():
+            parser.error(f"{args.resume} is not a training run folder (no config.yaml)")
         saved = yaml.safe_load((args.resume / "config.yaml").read_text())
         entry, env_id, seed, out = saved["entry"], saved["env_id"], saved["seed"], args.resume
         if args.timesteps is not None:
@@ -364,7 +366,10 @@ def plot_learning_curve(out: Path) -> Path | None:
     ax.set_xlabel("env steps")
     ax.set_ylabel("episode return")
     ax.grid(alpha=0.3)
-    ax.legend()
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend()
+    else:
+        ax.text(0.5, 0.5, "no finished episode yet", transform=ax.transAxes, ha="center")
     path = out / "learning_curve.png"
     fig.savefig(path, dpi=100, bbox_inches="tight")
     return path
