@@ -361,12 +361,31 @@ def test_coverage_window_is_robot_centred_and_turns_with_the_heading():
     pose = env.filter.pose
     # Rebuild the memory from the one pose the sensor has looked from, and read the window by hand.
     memory = make_memory(env._bounds, 0.5)
-    mark_coverage(memory, np.array(pose), env._bounds, 0.5, env.config.sensor.max_range, env.config.sensor.fov)
+    mark_coverage(
+        memory, np.array(pose), env._bounds, 0.5, env.config.sensor.max_range, env.config.sensor.fov
+    )
     assert np.array_equal(memory, env._memory)
     centre = grid // 2
     assert window[centre, centre + 2] == 1.0  # 4 m straight ahead: inside the 6 m, 180 degree footprint
     ahead_left = pose[:2] + 4.0 * np.array([np.cos(pose[2] + 0.5), np.sin(pose[2] + 0.5)])
-    assert env._memory[int((ahead_left[1] - env._bounds[1]) / 0.5), int((ahead_left[0] - env._bounds[0]) / 0.5)]
+    assert env._memory[
+        int((ahead_left[1] - env._bounds[1]) / 0.5), int((ahead_left[0] - env._bounds[0]) / 0.5)
+    ]
     behind = pose[:2] - 4.0 * np.array([np.cos(pose[2]), np.sin(pose[2])])
     inside = env._bounds[0] < behind[0] < env._bounds[2] and env._bounds[1] < behind[1] < env._bounds[3]
     assert window[centre, centre - 2] == (0.0 if inside else 1.0)  # behind: not looked at (or outside)
+
+
+def test_coverage_shaping_pays_for_newly_looked_at_area_only():
+    env = EKFSLAMEnv(reward={"coverage": 2.0})
+    env.reset(seed=1)
+    area = env._memory.sum() * 0.25
+    total = 0.0
+    for _ in range(50):
+        *_, info = env.step(np.array([1.0, 0.3]))
+        total += info["reward_terms"]["coverage"]
+    assert total == pytest.approx(2.0 * (env._memory.sum() * 0.25 - area))
+    for _ in range(30):  # spinning on the spot looks at nothing new after the first turn
+        *_, info = env.step(np.array([0.0, 1.0]))
+    assert info["reward_terms"]["coverage"] == 0.0
+    assert "coverage" not in EKFSLAMEnv().reset(seed=1)[1]["reward_terms"]

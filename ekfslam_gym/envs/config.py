@@ -108,6 +108,8 @@ class RewardConfig:
     a_opt, e_opt: weights of the drops of log trace Sigma and log lambda_max(Sigma) (A- and E-optimality).
     collision: penalty per step in contact with a wall. control_effort: penalty times |action|^2.
     step_cost: a constant cost per step (discourages idling once nothing is left to learn).
+    coverage: bonus per m^2 of the world the sensor looks at for the first time (the coverage memory), an
+    exploration shaping for training; 0 by default, so the default reward is the information gain alone.
     """
 
     info_gain: float = 1.0
@@ -116,9 +118,10 @@ class RewardConfig:
     collision: float = 1.0
     control_effort: float = 0.0
     step_cost: float = 0.0
+    coverage: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("info_gain", "a_opt", "e_opt", "collision", "control_effort", "step_cost"):
+        for name in ("info_gain", "a_opt", "e_opt", "collision", "control_effort", "step_cost", "coverage"):
             value = getattr(self, name)
             _require(isinstance(value, (int, float)) and math.isfinite(value), f"reward.{name}", "must be finite", value)  # fmt: skip
 

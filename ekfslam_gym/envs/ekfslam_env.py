@@ -18,7 +18,7 @@ from ..slam.ekf import EKFSLAM, FilterDivergedError
 from .config import EnvConfig
 from .observation import CLIP, fill_observation, make_memory, mark_coverage, observation_layout
 
-REWARD_TERMS = ("info_gain", "a_opt", "e_opt", "collision", "control_effort", "step_cost")
+REWARD_TERMS = ("info_gain", "a_opt", "e_opt", "collision", "control_effort", "step_cost", "coverage")
 
 
 @njit(cache=True)
@@ -100,7 +100,8 @@ class EKFSLAMEnv(gym.Env):
     23.3 - 2 ln r nats for a landmark first read at r m with the default sensor; the pose starts at
     ``filter.pose_prior``.
     ``collision`` = -1 per step in contact with a wall. Optional: ``a_opt``, ``e_opt`` (drops of ln trace and
-    ln lambda_max of Sigma), ``control_effort`` (-w |a|^2), ``step_cost`` (-w per step).
+    ln lambda_max of Sigma), ``control_effort`` (-w |a|^2), ``step_cost`` (-w per step), ``coverage`` (w per m^2
+    the sensor looks at for the first time: an exploration shaping for training).
 
     Standing still earns little: every prediction adds odometry noise (the noise floor), a negative term, and
     re-observing the same landmarks pays ever less (the information about them grows like ln t). Because the
@@ -277,9 +278,11 @@ class EKFSLAMEnv(gym.Env):
             terms["control_effort"] = -w[4] * (a0 * a0 + a1 * a1)
         if w[5]:
             terms["step_cost"] = -w[5]
+        newly_covered = self._mark_and_trail()
+        if w[6]:
+            terms["coverage"] = w[6] * newly_covered * self.config.observation.memory_resolution**2
         reward = sum(terms.values())
 
-        self._mark_and_trail()
         nees, rmse, closures, worst = self._metrics(readings.ids)
         self._loop_closures += closures
         terminated = (collided and cfg.terminate_on_collision) or (
@@ -302,14 +305,18 @@ class EKFSLAMEnv(gym.Env):
             self._last_seen, self._t, self.config.loop_gap,
         )  # fmt: skip
 
-    def _mark_and_trail(self) -> None:
+    def _mark_and_trail(self) -> int:
+        """Update the coverage memory (and the trails when rendering); returns the cells newly covered."""
         sensor = self.config.sensor
         resolution = self.config.observation.memory_resolution
-        mark_coverage(self._memory, self._ekf._mean, self._bounds, resolution, sensor.max_range, sensor.fov)
+        new = mark_coverage(
+            self._memory, self._ekf._mean, self._bounds, resolution, sensor.max_range, sensor.fov
+        )
         if self.render_mode is not None:
             pose = self._world._pose
             self._trail_true.append((pose[0], pose[1]))
             self._trail_est.append((float(self._ekf._mean[0]), float(self._ekf._mean[1])))
+        return new
 
     def _observation(self):
         ekf, cfg = self._ekf, self.config

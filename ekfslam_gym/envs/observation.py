@@ -74,7 +74,7 @@ def mark_coverage(memory, pose, bounds, resolution, max_range, fov):
     """Set the memory cells whose centres lie within max_range and the field of view of ``pose``.
 
     Walls are ignored: the belief holds none, so the memory records where the sensor pointed, not what it saw.
-    Only the footprint's bounding box is visited.
+    Only the footprint's bounding box is visited. Returns how many cells were newly marked.
     """
     rows, cols = memory.shape
     half_fov = 0.5 * fov
@@ -83,6 +83,7 @@ def mark_coverage(memory, pose, bounds, resolution, max_range, fov):
     r0 = max(0, int((pose[1] - max_range - bounds[1]) / resolution))
     r1 = min(rows - 1, int((pose[1] + max_range - bounds[1]) / resolution))
     range2 = max_range * max_range
+    marked = 0
     for row in range(r0, r1 + 1):
         dy = bounds[1] + (row + 0.5) * resolution - pose[1]
         for col in range(c0, c1 + 1):
@@ -94,6 +95,8 @@ def mark_coverage(memory, pose, bounds, resolution, max_range, fov):
             bearing = (math.atan2(dy, dx) - pose[2] + math.pi) % (2.0 * math.pi) - math.pi
             if abs(bearing) <= half_fov:
                 memory[row, col] = 1.0
+                marked += 1
+    return marked
 
 
 @njit(cache=True)
