@@ -20,6 +20,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy import stats
 
+from .angles import wrap_angles
+
 __all__ = [
     "ate",
     "anees",
@@ -30,13 +32,7 @@ __all__ = [
     "nees",
     "nees_bounds",
     "pose_errors",
-    "wrap_angle",
 ]
-
-
-def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
-    """Angles (rad) wrapped to [-pi, pi)."""
-    return (np.asarray(angle, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def pose_errors(estimated: np.ndarray, true: np.ndarray) -> np.ndarray:
@@ -46,7 +42,7 @@ def pose_errors(estimated: np.ndarray, true: np.ndarray) -> np.ndarray:
     if estimated.shape != true.shape or estimated.shape[-1] != 3:
         raise ValueError(f"poses must both be (..., 3), got {estimated.shape} and {true.shape}")
     errors = true - estimated
-    errors[..., 2] = wrap_angle(errors[..., 2])
+    errors[..., 2] = wrap_angles(errors[..., 2])
     return errors
 
 
