@@ -59,7 +59,12 @@ METRIC_KEYS: tuple[str, ...] = (
 )
 
 # Which way is better, for the table's arrows (None: neither, e.g. ANEES should be near 3, path length is context).
+SMOOTHER_KEYS: tuple[str, ...] = ("smoother_ate", "smoother_landmark_rmse")
+"""With ``--smoother``: the same episode smoothed by the graph back end (full SLAM), the filter's judge."""
+
 BETTER: dict[str, str | None] = {
+    "smoother_ate": "lower",
+    "smoother_landmark_rmse": "lower",
     "return": "higher",
     "map_log_det": "lower",
     "pose_log_det": "lower",
@@ -145,14 +150,22 @@ def episode_metrics(
     }
 
 
-def run_episode(env: gym.Env, agent: Any, seed: int, frames: Any = None) -> dict[str, float]:
+def run_episode(
+    env: gym.Env, agent: Any, seed: int, frames: Any = None, smoother: bool = False
+) -> dict[str, float]:
     """One seeded episode of ``agent`` in ``env``; appends each rendered frame to ``frames`` if given (a list
-    or a ``GifRecorder``).
+    or a ``GifRecorder``); with ``smoother``, also smooths the episode (``SMOOTHER_KEYS``).
 
     The trajectory metrics use the steps after reset (at reset the estimate is the true pose by construction).
     """
     observation, info = env.reset(seed=seed)
     agent.reset(env, seed=seed)
+    recording = None
+    if smoother:
+        from .smoothing import EpisodeRecorder
+
+        recording = EpisodeRecorder()
+        recording.add(info, first=True)
     if frames is not None:
         frames.append(env.render())
     true_poses, estimated_poses, pose_covs = [], [], []
@@ -164,6 +177,8 @@ def run_episode(env: gym.Env, agent: Any, seed: int, frames: Any = None) -> dict
         true_poses.append(info["true_pose"])
         estimated_poses.append(info["pose"])
         pose_covs.append(info["pose_cov"])
+        if recording is not None:
+            recording.add(info)
         if frames is not None:
             frames.append(env.render())
         if terminated or truncated:
@@ -171,6 +186,11 @@ def run_episode(env: gym.Env, agent: Any, seed: int, frames: Any = None) -> dict
     result = episode_metrics(
         env, total, np.array(true_poses), np.array(estimated_poses), np.array(pose_covs), info
     )
+    if recording is not None:
+        from .smoothing import compare_with_smoother
+
+        compared = compare_with_smoother(recording, env)
+        result.update({key: compared[key] for key in SMOOTHER_KEYS})
     return {"seed": int(seed), "steps": steps, **result}
 
 
@@ -210,6 +230,7 @@ def evaluate_agent(
     gif_stride: int = 2,
     label: str | None = None,
     progress: bool = False,
+    smoother: bool = False,
 ) -> list[dict[str, float]]:
     """Run ``agent`` (an ``agents.Agent`` or a registered name) once per seed; one metrics dict per episode.
 
@@ -233,7 +254,7 @@ def evaluate_agent(
             iterator = tqdm(seeds, desc=label, unit="episode", file=sys.stderr, leave=False)
         for seed in iterator:
             recorder = GifRecorder(gif_stride) if gif_dir is not None else None
-            results.append(run_episode(env, agent, seed, recorder))
+            results.append(run_episode(env, agent, seed, recorder, smoother=smoother))
             if recorder is not None:
                 recorder.save(Path(gif_dir) / f"{label}_seed{seed}.gif", env.metadata.get("render_fps", 10))
     finally:
@@ -416,6 +437,9 @@ def _build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--table", metavar="FILE.md", default=None, help="markdown table of the aggregates")
     parser.add_argument("--episodes-json", metavar="FILE", default=None, help="write the per-episode metrics")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
+    parser.add_argument("--smoother", action="store_true",
+                        help="also smooth every episode with graph SLAM and report smoother_ate and "
+                             "smoother_landmark_rmse beside the filter's ate and landmark_rmse")  # fmt: skip
     return parser
 
 
@@ -488,9 +512,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             rows += evaluate_agent(
                 agent, args.env_id, args.seeds, args.env_kwargs, max_episode_steps=args.max_episode_steps,
                 gif_dir=args.gif, gif_stride=args.gif_stride, label=tag, progress=not args.no_progress,
+                smoother=args.smoother,
             )  # fmt: skip
         episodes[label] = rows
-    summaries = {label: summary(label, rows) for label, rows in episodes.items()}
+    keys = METRIC_KEYS + (SMOOTHER_KEYS if args.smoother else ())
+    summaries = {label: summary(label, rows, keys=keys) for label, rows in episodes.items()}
 
     if args.table:
         path = Path(args.table)
@@ -499,10 +525,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         held_out = " (the held-out suite)" if list(seeds) == list(HELD_OUT_SEEDS) else ""
         path.write_text(
             f"`{args.env_id}`, seeds {seeds[0]}-{seeds[-1]}{held_out}, {len(seeds)} episodes per agent.\n\n"
-            + markdown_table(summaries)
+            + markdown_table(summaries, keys)
         )
     if args.plot:
-        plot_results(episodes, args.plot)
+        plot_results(episodes, args.plot, keys)
     if args.episodes_json:
         Path(args.episodes_json).write_text(json.dumps(_json_safe(episodes), indent=1))
 
@@ -516,7 +542,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"pose NEES per-step 95 % bounds: [{NEES_STEP_BOUNDS[0]:.3f}, {NEES_STEP_BOUNDS[1]:.2f}]")
         if len(summaries) > 1:
             print()
-            print(markdown_table(summaries), end="")
+            print(markdown_table(summaries, keys), end="")
     return 0
 
 

@@ -49,8 +49,9 @@ class EpisodeRecorder:
 
 
 def compare_with_smoother(recorder: EpisodeRecorder, env, method: str = "gn") -> dict[str, float]:
-    """Filter vs smoother on the recorded episode: ATE (m, no alignment) and landmark RMSE of the landmarks each
-    estimated (m). ``env`` is the (unwrapped) env the episode ran in, still at its last step."""
+    """Filter vs smoother on the recorded episode: ATE (m, no alignment, over the steps after reset: at reset both
+    start at the true pose) and landmark RMSE of the landmarks each estimated (m). ``env`` is the env the episode
+    ran in, still at its last step."""
     env = env.unwrapped
     config = env.config
     true_poses = np.array(recorder.true_poses)
@@ -65,8 +66,8 @@ def compare_with_smoother(recorder: EpisodeRecorder, env, method: str = "gn") ->
     smoother_rmse, _ = landmark_errors(np.nan_to_num(smoothed.landmarks), truth, smoother_seen)
     return {
         "steps": len(recorder.odometry),
-        "filter_ate": ate(np.array(recorder.filter_poses)[:, :2], true_poses[:, :2]),
-        "smoother_ate": ate(smoothed.poses[:, :2], true_poses[:, :2]),
+        "filter_ate": ate(np.array(recorder.filter_poses)[1:, :2], true_poses[1:, :2]),
+        "smoother_ate": ate(smoothed.poses[1:, :2], true_poses[1:, :2]),
         "filter_landmark_rmse": filter_rmse,
         "smoother_landmark_rmse": smoother_rmse,
         "smoother_iterations": smoothed.result.iterations,

@@ -120,3 +120,15 @@ def test_episode_metrics_are_consistent_with_the_env():
     assert 0 <= episode["nees_in_bounds"] <= 1 and episode["anees"] > 0
     assert episode["ate"] >= 0 and episode["landmark_rmse"] >= 0 and 0 < episode["path_length"] <= 4.0 + 1e-6
     assert episode["map_log_det"] < 30 * 2 * math.log(100.0)  # below the all-unseen prior
+
+
+def test_smoother_option_reports_the_smoothed_episode_beside_the_filter(capsys):
+    import json
+
+    from ekfslam_gym.evaluate import main
+
+    assert main(["--agent", "circle", "--seeds", "10000", "--smoother", "--json", "--no-progress"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    metrics = out["metrics"]
+    assert {"smoother_ate", "smoother_landmark_rmse", "ate", "landmark_rmse"} <= set(metrics)
+    assert metrics["smoother_ate"]["mean"] < metrics["ate"]["mean"]
