@@ -227,7 +227,7 @@ def test_subproc_vec_env_runs():
     venv = make_vec_env("ekfslam_gym:EKFSLAM-v0", n_envs=2, seed=0, vec_env_cls=sb3_vec.SubprocVecEnv,
                         env_kwargs={"max_episode_steps": 4})  # fmt: skip
     obs = venv.reset()
-    assert obs.shape == (2, 139)
+    assert obs.shape == (2, 164)
     ended = []
     for _ in range(6):
         obs, rewards, dones, infos = venv.step(np.zeros((2, 2), dtype=np.float32))
@@ -324,7 +324,7 @@ def test_observations_stay_inside_the_space_and_are_finite():
     for _ in range(300):
         obs, *_ = env.step(rng.uniform(-1, 1, 2))
         assert env.observation_space.contains(obs) and np.isfinite(obs).all()
-    window = obs[-81:].reshape(9, 9)
+    window = obs[-106:-25].reshape(9, 9)
     assert window.max() == 1.0 and window.min() == 0.0  # some of the world looked at, some not yet
 
 
@@ -389,3 +389,17 @@ def test_coverage_shaping_pays_for_newly_looked_at_area_only():
         *_, info = env.step(np.array([0.0, 1.0]))
     assert info["reward_terms"]["coverage"] == 0.0
     assert "coverage" not in EKFSLAMEnv().reset(seed=1)[1]["reward_terms"]
+
+
+def test_coarse_window_holds_the_fraction_looked_at_and_can_be_disabled():
+    env = EKFSLAMEnv()
+    obs, _ = env.reset(seed=2)
+    coarse = obs[-25:].reshape(5, 5)
+    assert coarse.min() >= 0.0 and coarse.max() <= 1.0
+    assert np.any((coarse > 0.0) & (coarse < 1.0))  # partly looked-at cells are fractions, not flags
+    assert (
+        coarse[0].min() == 1.0 or coarse[:, 0].min() == 1.0 or coarse[-1].min() == 1.0
+    )  # 20 m reaches outside
+    plain = EKFSLAMEnv(observation={"coarse_grid": 0})
+    assert plain.observation_space.shape == (139,)
+    np.testing.assert_array_equal(plain.reset(seed=2)[0], obs[:-25])

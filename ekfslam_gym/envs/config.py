@@ -135,6 +135,8 @@ class ObservationConfig:
     its heading, reaching grid_extent m to each side, read from a coverage memory of the world kept at
     memory_resolution m per cell (where the sensor has already looked). An MLP reads "unexplored, ahead on the
     left" from a robot-centred window far more easily than from a world-fixed map plus the pose.
+    coarse_grid, coarse_extent: a second, coarser and wider window of the same memory (each cell the fraction
+    looked at), so the far side of the world is not out of sight; coarse_grid 0 disables it.
     """
 
     kind: str = "box"
@@ -142,6 +144,8 @@ class ObservationConfig:
     grid: int = 9
     grid_extent: float = 9.0
     memory_resolution: float = 0.5
+    coarse_grid: int = 5
+    coarse_extent: float = 20.0
 
     def __post_init__(self) -> None:
         _require(self.kind in ("box", "dict"), "observation.kind", "must be box|dict", self.kind)
@@ -149,6 +153,8 @@ class ObservationConfig:
         _integer("observation.grid", self.grid, 1)
         _positive("observation.grid_extent", self.grid_extent)
         _positive("observation.memory_resolution", self.memory_resolution)
+        _integer("observation.coarse_grid", self.coarse_grid, 0)
+        _positive("observation.coarse_extent", self.coarse_extent)
 
 
 @dataclass(frozen=True)

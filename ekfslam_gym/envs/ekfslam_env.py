@@ -86,9 +86,9 @@ class EKFSLAMEnv(gym.Env):
     ``ValueError`` and change nothing.
 
     ## Observation Space
-    ``Box(-5, 5, (D,), float32)`` with D = 4 + 3 + 4k + 3 + B + G^2 (139 by default: k = 8 landmark slots,
-    B = 16 scan beams, a 9 x 9 robot-centred window of the coverage memory), or with ``observation.kind = "dict"`` a ``Dict`` of the same
-    parts: ``pose``, ``pose_cov``, ``landmarks``, ``globals``, ``scan``, ``coverage`` (see
+    ``Box(-5, 5, (D,), float32)`` with D = 4 + 3 + 4k + 3 + B + G^2 + C^2 (164 by default: k = 8 landmark
+    slots, B = 16 scan beams, a 9 x 9 robot-centred window of the coverage memory and a coarse 5 x 5 one), or with ``observation.kind = "dict"`` a ``Dict`` of the same
+    parts: ``pose``, ``pose_cov``, ``landmarks``, ``globals``, ``scan``, ``coverage``, ``coverage_coarse`` (see
     ``ekfslam_gym.envs.observation`` for every entry and its normalisation).
 
     ## Rewards
@@ -159,7 +159,9 @@ class EKFSLAMEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": int(round(1.0 / config.dt))}
 
         obs_cfg = config.observation
-        self._layout_slices = observation_layout(obs_cfg.k_nearest, config.sensor.n_beams, obs_cfg.grid)
+        self._layout_slices = observation_layout(
+            obs_cfg.k_nearest, config.sensor.n_beams, obs_cfg.grid, obs_cfg.coarse_grid
+        )
         size = sum(s.stop - s.start for s in self._layout_slices.values())
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         flat = spaces.Box(-CLIP, CLIP, shape=(size,), dtype=np.float32)
@@ -324,7 +326,8 @@ class EKFSLAMEnv(gym.Env):
         obs = cfg.observation
         fill_observation(
             self._obs, ekf._mean, ekf._cov, ekf._observed, self._log_det, ekf._P, self._world.scan(), self._memory,
-            self._bounds, obs.memory_resolution, obs.grid, obs.grid_extent, self._centre, self._half_size,
+            self._bounds, obs.memory_resolution, obs.grid, obs.grid_extent, obs.coarse_grid, obs.coarse_extent,
+            self._centre, self._half_size,
             cfg.sensor.max_range, cfg.sensor.scan_max_range, time_left, obs.k_nearest,
         )  # fmt: skip
         return self._obs_out()

@@ -17,6 +17,9 @@ coverage   G*G    a robot-centred window, turned with the estimated heading and 
                   within range and field of view of the pose *estimate* at some step; walls ignored, the
                   belief has none) or outside the world, else 0. Row-major: row 0 is furthest to the left,
                   column 0 furthest behind, so the robot faces along the rows towards the last column
+coverage_  C*C    the same, coarser and wider (coarse_grid cells reaching coarse_extent m): each cell the
+coarse            fraction of it looked at, so that beyond the fine window the robot still knows where the
+                  unexplored part of the world lies (0 disables it)
 ========== ====== ================================================================================================
 
 Everything is computed by one compiled kernel writing into a preallocated vector: the env is stepped millions
@@ -34,9 +37,10 @@ from ..slam._kernels import det3
 
 CLIP = 5.0
 LANDMARK_FEATURES = 4
+COARSE_SAMPLES = 4  # points per side averaged in each cell of the coarse window
 
 
-def observation_layout(k_nearest: int, n_beams: int, grid: int) -> dict[str, slice]:
+def observation_layout(k_nearest: int, n_beams: int, grid: int, coarse_grid: int = 0) -> dict[str, slice]:
     """Name -> slice of the flat observation vector."""
     sizes = {
         "pose": 4,
@@ -46,6 +50,8 @@ def observation_layout(k_nearest: int, n_beams: int, grid: int) -> dict[str, sli
         "scan": n_beams,
         "coverage": grid * grid,
     }
+    if coarse_grid:
+        sizes["coverage_coarse"] = coarse_grid * coarse_grid
     layout, start = {}, 0
     for name, size in sizes.items():
         layout[name] = slice(start, start + size)
@@ -100,6 +106,36 @@ def mark_coverage(memory, pose, bounds, resolution, max_range, fov):
 
 
 @njit(cache=True)
+def _window(out, o, memory, bounds, resolution, x, y, c, s, grid, extent, samples):
+    """Write a robot-centred grid x grid window of the coverage memory at out[o:], reaching ``extent`` m to
+    each side; each cell is the mean of samples x samples points in it. Returns the next offset.
+
+    Cell (row, col) sits at (forward, left) offsets in the robot frame: row 0 furthest to the left, column 0
+    furthest behind. Outside the world counts as looked at (there is nothing to find there).
+    """
+    rows, cols = memory.shape
+    cell = 2.0 * extent / grid
+    step = cell / samples
+    for row in range(grid):
+        for col in range(grid):
+            total = 0.0
+            for i in range(samples):
+                left = extent - row * cell - (i + 0.5) * step
+                for j in range(samples):
+                    forward = -extent + col * cell + (j + 0.5) * step
+                    wx = x + c * forward - s * left
+                    wy = y + s * forward + c * left
+                    mc = int(math.floor((wx - bounds[0]) / resolution))
+                    mr = int(math.floor((wy - bounds[1]) / resolution))
+                    if 0 <= mr < rows and 0 <= mc < cols:
+                        total += memory[mr, mc]
+                    else:
+                        total += 1.0
+            out[o + row * grid + col] = total / (samples * samples)
+    return o + grid * grid
+
+
+@njit(cache=True)
 def fill_observation(
     out,
     mean,
@@ -113,6 +149,8 @@ def fill_observation(
     resolution,
     grid,
     extent,
+    coarse_grid,
+    coarse_extent,
     centre,
     half_size,
     max_range,
@@ -171,19 +209,6 @@ def fill_observation(
     for b in range(scan.shape[0]):
         out[o + b] = min(scan[b] / scan_max, 1.0)
     o += scan.shape[0]
-    # Robot-centred window: cell (row, col) sits at (forward, left) offsets in the robot frame; outside the
-    # world counts as looked at (there is nothing to find there).
-    rows, cols = memory.shape
-    cell = 2.0 * extent / grid
-    for row in range(grid):
-        left = extent - (row + 0.5) * cell
-        for col in range(grid):
-            forward = -extent + (col + 0.5) * cell
-            wx = x + c * forward - s * left
-            wy = y + s * forward + c * left
-            mc = int(math.floor((wx - bounds[0]) / resolution))
-            mr = int(math.floor((wy - bounds[1]) / resolution))
-            if 0 <= mr < rows and 0 <= mc < cols:
-                out[o + row * grid + col] = memory[mr, mc]
-            else:
-                out[o + row * grid + col] = 1.0
+    o = _window(out, o, memory, bounds, resolution, x, y, c, s, grid, extent, 1)
+    if coarse_grid > 0:
+        _window(out, o, memory, bounds, resolution, x, y, c, s, coarse_grid, coarse_extent, COARSE_SAMPLES)
