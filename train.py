@@ -76,6 +76,14 @@ def parse_hyperparams(pairs: list[str]) -> dict[str, Any]:
     return out
 
 
+def schedule(value: Any) -> Any:
+    """rl-zoo3's ``lin_X``: a learning rate falling linearly from X to 0 over the run; numbers pass through."""
+    if isinstance(value, str) and value.startswith("lin_"):
+        start = float(value[4:])
+        return lambda progress_remaining: progress_remaining * start
+    return value
+
+
 def versions() -> dict[str, str]:
     found = {"python": platform.python_version()}
     for name in (
@@ -288,7 +296,8 @@ def main(argv: list[str] | None = None) -> Path:
     monitor = out / "monitor" / f"from_{0 if checkpoint is None else checkpoint[1]}"
     train_env, eval_env = make_envs(env_id, entry, n_envs, env_seed, monitor, stats)
 
-    hyper = {k: v for k, v in entry.items() if k not in TRAIN_KEYS}
+    hyper = {k: schedule(v) if k in ("learning_rate", "clip_range") else v
+             for k, v in entry.items() if k not in TRAIN_KEYS}  # fmt: skip
     if checkpoint is None:
         model = PPO(
             entry["policy"], train_env, seed=seed, tensorboard_log=str(out / "tb"), verbose=0, **hyper

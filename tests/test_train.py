@@ -80,3 +80,9 @@ def test_demo_smoke_runs_every_stage(tmp_path):
     table = (tmp_path / "comparison.md").read_text()
     for agent in ("random", "circle", "lawnmower", "greedy", "ppo"):
         assert f"| {agent}" in table
+
+
+def test_linear_schedules_in_rl_zoo_spelling():
+    rate = train.schedule("lin_3e-4")
+    assert rate(1.0) == pytest.approx(3e-4) and rate(0.5) == pytest.approx(1.5e-4) and rate(0.0) == 0.0
+    assert train.schedule(0.2) == 0.2
