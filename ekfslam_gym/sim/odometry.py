@@ -24,6 +24,21 @@ from .geometry import wrap_angle
 HALF_PI = 0.5 * math.pi
 
 
+def _freeze_noise_vector(params: object, names: tuple[str, ...]) -> None:
+    """Validate an alpha-model parameter set (four alphas, then two floors) and attach ``vector``, the (6,)
+    read-only array of the parameters in the order the kernels read them."""
+    kind = type(params).__name__
+    for name in names:
+        value = getattr(params, name)
+        if not (math.isfinite(value) and value >= 0.0):
+            raise ValueError(f"{kind}.{name} must be finite and >= 0, got {value!r}")
+    if getattr(params, names[4]) <= 0.0 or getattr(params, names[5]) <= 0.0:
+        raise ValueError(f"{kind} floors must be > 0 so the motion covariance is positive definite")
+    vector = np.array([getattr(params, name) for name in names], dtype=np.float64)
+    vector.flags.writeable = False
+    object.__setattr__(params, "vector", vector)
+
+
 @dataclass(frozen=True)
 class OdometryNoise:
     """Noise of the odometry model (Thrun's alpha model, in standard deviations, plus a floor).
@@ -44,18 +59,7 @@ class OdometryNoise:
     trans_floor: float = 1e-3
 
     def __post_init__(self) -> None:
-        for name in ("alpha1", "alpha2", "alpha3", "alpha4", "rot_floor", "trans_floor"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"OdometryNoise.{name} must be finite and >= 0, got {value!r}")
-        if self.rot_floor <= 0.0 or self.trans_floor <= 0.0:
-            raise ValueError("OdometryNoise floors must be > 0 so the motion covariance is positive definite")
-        vector = np.array(
-            [self.alpha1, self.alpha2, self.alpha3, self.alpha4, self.rot_floor, self.trans_floor],
-            dtype=np.float64,
-        )
-        vector.flags.writeable = False
-        object.__setattr__(self, "vector", vector)  # (6,) the parameters in the order the kernels read them
+        _freeze_noise_vector(self, ("alpha1", "alpha2", "alpha3", "alpha4", "rot_floor", "trans_floor"))
 
 
 @dataclass(frozen=True)
@@ -76,18 +80,7 @@ class VelocityNoise:
     omega_floor: float = 0.01
 
     def __post_init__(self) -> None:
-        for name in ("alpha1", "alpha2", "alpha3", "alpha4", "v_floor", "omega_floor"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"VelocityNoise.{name} must be finite and >= 0, got {value!r}")
-        if self.v_floor <= 0.0 or self.omega_floor <= 0.0:
-            raise ValueError("VelocityNoise floors must be > 0 so the motion covariance is positive definite")
-        vector = np.array(
-            [self.alpha1, self.alpha2, self.alpha3, self.alpha4, self.v_floor, self.omega_floor],
-            dtype=np.float64,
-        )
-        vector.flags.writeable = False
-        object.__setattr__(self, "vector", vector)  # (6,) the parameters in the order the kernels read them
+        _freeze_noise_vector(self, ("alpha1", "alpha2", "alpha3", "alpha4", "v_floor", "omega_floor"))
 
 
 class OdometryReading(NamedTuple):
