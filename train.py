@@ -11,7 +11,8 @@ held-out suite) and ``checkpoint_freq`` (total env steps). The output folder rec
 - ``model.zip`` + ``model_vecnormalize.pkl``: the final policy and its normalisation statistics;
 - ``best_model.zip`` + ``best_model_vecnormalize.pkl``: the best on the evaluation seeds;
 - ``checkpoints/``: ``ppo_<steps>_steps.zip`` with ``..._vecnormalize.pkl`` and ``..._rng.pkl`` (random state);
-- ``config.yaml`` (the resolved entry and command line) and ``versions.json`` beside every model;
+- ``config.yaml`` (the resolved entry and command line) and ``versions.json``, copied beside every model as
+  ``<model>_config.yaml`` and ``<model>_versions.json``;
 - ``tb/`` tensorboard logs, ``monitor/`` episode logs, ``evaluations.npz`` and ``learning_curve.png``.
 
 ``--resume DIR`` continues the run in DIR from its last checkpoint: weights, optimiser state, normalisation
@@ -121,7 +122,7 @@ def build_callbacks(out: Path, entry: dict[str, Any], eval_env, n_envs: int):
                 self.next_at = (self.num_timesteps // self.every + 1) * self.every
                 return
             if self.num_timesteps >= self.next_at:
-                save_checkpoint(self.model, out / "checkpoints", self.num_timesteps)
+                save_checkpoint(self.model, out, self.num_timesteps)
                 self.next_at = (self.num_timesteps // self.every + 1) * self.every
 
         def _on_step(self) -> bool:
@@ -151,7 +152,7 @@ def build_callbacks(out: Path, entry: dict[str, Any], eval_env, n_envs: int):
                 best_before = self.best_mean_reward
                 result = super()._on_step()
                 if self.best_mean_reward > best_before:
-                    save_with_stats(self.model, out / "best_model")
+                    save_with_stats(self.model, out / "best_model", out)
                 return result
             return True
 
@@ -169,21 +170,24 @@ def build_callbacks(out: Path, entry: dict[str, Any], eval_env, n_envs: int):
     return callbacks
 
 
-def save_with_stats(model, stem: Path) -> None:
-    """``stem.zip`` and, if the model normalises, ``stem_vecnormalize.pkl`` (the convention the agents load)."""
+def save_with_stats(model, stem: Path, run: Path) -> None:
+    """``stem.zip``, ``stem_vecnormalize.pkl`` if the model normalises (the convention the agents load), and the
+    run's config and package versions beside it as ``stem_config.yaml`` and ``stem_versions.json``."""
     stem.parent.mkdir(parents=True, exist_ok=True)
     model.save(str(stem) + ".zip")
     normalizer = model.get_vec_normalize_env()
     if normalizer is not None:
         normalizer.save(str(stem) + "_vecnormalize.pkl")
+    for name, suffix in (("config.yaml", "_config.yaml"), ("versions.json", "_versions.json")):
+        (Path(str(stem) + suffix)).write_text((run / name).read_text())
 
 
-def save_checkpoint(model, folder: Path, steps: int) -> None:
+def save_checkpoint(model, run: Path, steps: int) -> None:
     import numpy as np
     import torch
 
-    stem = folder / f"ppo_{steps}_steps"
-    save_with_stats(model, stem)
+    stem = run / "checkpoints" / f"ppo_{steps}_steps"
+    save_with_stats(model, stem, run)
     # SB3 draws from the legacy global numpy RNG, so that is the state to keep.
     state = {"python": random.getstate(), "numpy": np.random.get_state(), "torch": torch.get_rng_state()}  # noqa: NPY002
     with open(str(stem) + "_rng.pkl", "wb") as handle:
@@ -320,8 +324,8 @@ def main(argv: list[str] | None = None) -> Path:
     if remaining > 0:
         model.learn(total_timesteps=remaining, callback=callbacks, progress_bar=not args.no_progress,
                     reset_num_timesteps=reset, tb_log_name="ppo")  # fmt: skip
-    save_with_stats(model, out / "model")
-    save_checkpoint(model, out / "checkpoints", model.num_timesteps)
+    save_with_stats(model, out / "model", out)
+    save_checkpoint(model, out, model.num_timesteps)
     train_env.close()
     eval_env.close()
     plot_learning_curve(out)

@@ -54,8 +54,12 @@ def load_vecnormalize(path: str | Path) -> Any:
 
 
 def training_record(zip_path: str | Path) -> dict[str, Any] | None:
-    """The trainer's ``config.yaml`` beside the model, parsed, or None when there is none (or it is unreadable)."""
-    path = Path(zip_path).parent / "config.yaml"
+    """The trainer's record of the model's run, parsed: ``<model>_config.yaml`` beside it, else the run folder's
+    ``config.yaml``; None when there is none (or it is unreadable)."""
+    zip_path = Path(zip_path)
+    path = zip_path.with_name(zip_path.stem + "_config.yaml")
+    if not path.is_file():
+        path = zip_path.parent / "config.yaml"
     if not path.is_file():
         return None
     import yaml

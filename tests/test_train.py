@@ -22,7 +22,8 @@ def test_train_saves_resumes_and_evaluates(tmp_path):
     train.main(
         ["--timesteps", "512", "--out", str(out), "--seed", "3", "--no-progress", "--hyperparams", *SMOKE]
     )
-    for name in ("model.zip", "model_vecnormalize.pkl", "config.yaml", "versions.json", "evaluations.npz",
+    for name in ("model.zip", "model_vecnormalize.pkl", "model_config.yaml", "model_versions.json", "config.yaml",
+                 "versions.json", "evaluations.npz", "best_model_config.yaml",
                  "learning_curve.png", "best_model.zip", "best_model_vecnormalize.pkl"):  # fmt: skip
         assert (out / name).is_file(), name
     assert json.loads((out / "versions.json").read_text())["stable-baselines3"] != "not installed"
