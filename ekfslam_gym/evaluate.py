@@ -198,8 +198,9 @@ class GifRecorder:
     """Collects every ``stride``-th (H, W, 3) uint8 frame, quantised to a 64-colour palette as it arrives (a
     500-step episode of raw 640 x 640 frames would hold 600 MB), and writes them as one looping GIF."""
 
-    def __init__(self, stride: int = 1) -> None:
+    def __init__(self, stride: int = 1, scale: float = 1.0) -> None:
         self.stride = max(int(stride), 1)
+        self.scale = float(scale)
         self.images: list[Any] = []
         self._count = 0
 
@@ -207,7 +208,11 @@ class GifRecorder:
         from PIL import Image
 
         if self._count % self.stride == 0:
-            self.images.append(Image.fromarray(np.asarray(frame, dtype=np.uint8)).quantize(colors=64))
+            image = Image.fromarray(np.asarray(frame, dtype=np.uint8))
+            if self.scale != 1.0:
+                size = (max(1, round(image.width * self.scale)), max(1, round(image.height * self.scale)))
+                image = image.resize(size, Image.Resampling.LANCZOS)
+            self.images.append(image.quantize(colors=64))
         self._count += 1
 
     def save(self, path: str | Path, fps: float) -> Path:
@@ -228,6 +233,7 @@ def evaluate_agent(
     max_episode_steps: int | None = None,
     gif_dir: str | Path | None = None,
     gif_stride: int = 2,
+    gif_scale: float = 1.0,
     label: str | None = None,
     progress: bool = False,
     smoother: bool = False,
@@ -253,7 +259,7 @@ def evaluate_agent(
 
             iterator = tqdm(seeds, desc=label, unit="episode", file=sys.stderr, leave=False)
         for seed in iterator:
-            recorder = GifRecorder(gif_stride) if gif_dir is not None else None
+            recorder = GifRecorder(gif_stride, gif_scale) if gif_dir is not None else None
             results.append(run_episode(env, agent, seed, recorder, smoother=smoother))
             if recorder is not None:
                 recorder.save(Path(gif_dir) / f"{label}_seed{seed}.gif", env.metadata.get("render_fps", 10))
@@ -433,6 +439,7 @@ def _build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--json", action="store_true", help="print exactly one JSON object to stdout")
     parser.add_argument("--gif", metavar="DIR", default=None, help="write one GIF per episode to DIR")
     parser.add_argument("--gif-stride", type=int, default=2, help="keep every n-th frame in GIFs")
+    parser.add_argument("--gif-scale", type=float, default=1.0, help="resize GIF frames by this factor")
     parser.add_argument("--plot", metavar="FILE", default=None, help="box plots of every metric")
     parser.add_argument("--table", metavar="FILE.md", default=None, help="markdown table of the aggregates")
     parser.add_argument("--episodes-json", metavar="FILE", default=None, help="write the per-episode metrics")
@@ -511,7 +518,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             tag = label if len(agent_list) == 1 else f"{label}{k}"
             rows += evaluate_agent(
                 agent, args.env_id, args.seeds, args.env_kwargs, max_episode_steps=args.max_episode_steps,
-                gif_dir=args.gif, gif_stride=args.gif_stride, label=tag, progress=not args.no_progress,
+                gif_dir=args.gif, gif_stride=args.gif_stride, gif_scale=args.gif_scale, label=tag,
+                progress=not args.no_progress,
                 smoother=args.smoother,
             )  # fmt: skip
         episodes[label] = rows
