@@ -32,8 +32,11 @@ test: install
 test-fast: install
 	$(BIN)/python -m pytest -m "not slow"
 
-bench: install
+bench: install  # bench/graph.py compares with GTSAM when the bench extra is installed (EXTRAS=...,bench)
 	$(BIN)/python bench/ekf.py
+	$(BIN)/python bench/env.py
+	$(BIN)/python bench/train.py
+	$(BIN)/python bench/graph.py
 
 lint: install
 	$(BIN)/ruff check . && $(BIN)/ruff format --check .
