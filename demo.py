@@ -34,7 +34,7 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
 
     import train
-    from ekfslam_gym import evaluate, replay
+    from ekfslam_gym.cli import evaluate, replay
 
     print("== 1. EKF-SLAM replay of the simulated drive", flush=True)
     replay_args = ["--plot", str(out / "replay.png")]

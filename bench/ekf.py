@@ -20,8 +20,8 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from numba import njit  # noqa: E402
 
-from ekfslam_gym.slam import EKFSLAM, odometry_motion, range_bearing, wrap_angle  # noqa: E402
-from ekfslam_gym.slam import _kernels as kernels  # noqa: E402
+from ekfslam_gym.filter import EKFSLAM, odometry_motion, range_bearing, wrap_angle  # noqa: E402
+from ekfslam_gym.filter import kernels as kernels  # noqa: E402
 
 READINGS_PER_STEP = 4
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ekfslam_gym.slam.models import odometry_motion, range_bearing, wrap_angle
+from ekfslam_gym.filter.models import odometry_motion, range_bearing, wrap_angle
 
 
 @dataclass

@@ -21,7 +21,7 @@ from agents import (
 )
 from agents.greedy import _distance_field, _update_walls, expected_readings, rollout_gain
 from agents.ppo import model_paths
-from ekfslam_gym.slam.models import range_bearing
+from ekfslam_gym.filter.models import range_bearing
 
 
 def _run(agent, seed=0, steps=50, env_id="EKFSLAM-v0"):
@@ -308,7 +308,7 @@ def test_ppo_agent_path_without_zip_and_clear_errors(tiny_ppo, tmp_path):
 def test_evaluate_cli_runs_the_ppo_agent(tiny_ppo, capsys):
     import json
 
-    from ekfslam_gym.evaluate import main
+    from ekfslam_gym.cli.evaluate import main
 
     argv = ["--agent", "ppo", "--model", str(tiny_ppo), "--seeds", "0-1", "--max-episode-steps", "10"]
     assert main([*argv, "--json", "--no-progress"]) == 0

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from ekfslam_gym.slam import EKFSLAM, FilterDivergedError, range_bearing, wrap_angle
-from ekfslam_gym.slam.models import odometry_motion, velocity_motion
+from ekfslam_gym.filter import EKFSLAM, FilterDivergedError, range_bearing, wrap_angle
+from ekfslam_gym.filter.models import odometry_motion, velocity_motion
 
 from .drives import loop_drive, ring_landmarks
 

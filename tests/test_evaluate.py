@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from ekfslam_gym.evaluate import (
+from ekfslam_gym.cli.evaluate import (
     HELD_OUT_SEEDS,
     METRIC_KEYS,
     aggregate,
@@ -94,7 +94,7 @@ def test_evaluate_agent_is_reproducible_and_paired():
 
 
 def test_max_episode_steps_goes_into_the_env_config():
-    from ekfslam_gym.evaluate import make_env
+    from ekfslam_gym.cli.evaluate import make_env
 
     env = make_env("EKFSLAM-Loop-v0", max_episode_steps=12)
     assert env.unwrapped.config.max_episode_steps == 12
@@ -125,7 +125,7 @@ def test_episode_metrics_are_consistent_with_the_env():
 def test_smoother_option_reports_the_smoothed_episode_beside_the_filter(capsys):
     import json
 
-    from ekfslam_gym.evaluate import main
+    from ekfslam_gym.cli.evaluate import main
 
     assert main(["--agent", "circle", "--seeds", "10000", "--smoother", "--json", "--no-progress"]) == 0
     out = json.loads(capsys.readouterr().out)

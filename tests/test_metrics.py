@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from ekfslam_gym import metrics
+from ekfslam_gym.evaluation import metrics
 
 
 def test_ate_of_a_shifted_trajectory_is_the_shift():

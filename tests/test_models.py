@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from ekfslam_gym.slam.models import (
+from ekfslam_gym.filter.models import (
     inverse_range_bearing,
     odometry_motion,
     range_bearing,

@@ -9,7 +9,7 @@ import pytest
 
 from ekfslam_gym.data.course import read_sensor_data, read_world
 from ekfslam_gym.data.drive import simulate_drive
-from ekfslam_gym.replay import main, replay
+from ekfslam_gym.cli.replay import main, replay
 from tests.datapaths import freiburg_dir
 
 
@@ -202,7 +202,7 @@ def test_course_format_files_replay_like_the_drive(tmp_path, capsys):
 def test_pictures_leave_pyplot_alone(tmp_path):
     import sys
 
-    from ekfslam_gym import plotting
+    from ekfslam_gym.evaluation import plotting
 
     had_pyplot = "matplotlib.pyplot" in sys.modules
     drive = simulate_drive(1)
@@ -213,7 +213,7 @@ def test_pictures_leave_pyplot_alone(tmp_path):
 
 
 def test_belief_from_state_reads_the_filter_blocks():
-    from ekfslam_gym.plotting import Belief
+    from ekfslam_gym.evaluation.plotting import Belief
 
     drive = simulate_drive(2)
     ekf = replay(drive.data, world=drive.world, steps=50).ekf

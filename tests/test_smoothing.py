@@ -6,7 +6,7 @@ import pytest
 
 import ekfslam_gym  # noqa: F401
 from agents import make_agent
-from ekfslam_gym.smoothing import EpisodeRecorder, compare_with_smoother, main, run_episode
+from ekfslam_gym.cli.smoothing import EpisodeRecorder, compare_with_smoother, main, run_episode
 
 
 @pytest.mark.parametrize("seed", [10000, 10001])

@@ -16,7 +16,7 @@ SMOKE = ["n_steps=64", "batch_size=64", "n_envs=2", "vec_env=dummy", "eval_freq=
 
 
 def test_train_saves_resumes_and_evaluates(tmp_path):
-    from ekfslam_gym import evaluate
+    from ekfslam_gym.cli import evaluate
 
     out = tmp_path / "run"
     train.main(

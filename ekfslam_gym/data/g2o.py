@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..slam.graph import FactorGraph, GraphProblem, Values
+from ..graph.optimizer import FactorGraph, GraphProblem, Values
 
 __all__ = ["read_g2o", "write_g2o"]
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import scipy.io
 
-from ..slam.graph import FactorGraph, GraphProblem, Values
+from ..graph.optimizer import FactorGraph, GraphProblem, Values
 
 __all__ = ["read_mat_graph"]
 

@@ -14,7 +14,7 @@ from numba import njit
 
 from ..sim.layouts import make_layout
 from ..sim.world import World
-from ..slam.ekf import EKFSLAM, FilterDivergedError
+from ..filter.ekf import EKFSLAM, FilterDivergedError
 from .config import EnvConfig
 from .observation import CLIP, fill_observation, make_memory, mark_coverage, observation_layout
 

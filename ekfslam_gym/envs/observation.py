@@ -33,7 +33,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..slam._kernels import det3
+from ..filter.kernels import det3
 
 CLIP = 5.0
 LANDMARK_FEATURES = 4

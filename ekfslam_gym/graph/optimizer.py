@@ -9,7 +9,7 @@ minimise the course's global error
 and return an `OptimizationResult`. Variables are indices: pose p is ``values.poses[p]`` = (x, y, θ) [m, m, rad],
 landmark l is ``values.landmarks[l]`` = (x, y) [m].
 
-Edge types (see `ekfslam_gym.slam.factors` for the error functions and Jacobians):
+Edge types (see `ekfslam_gym.graph.factors` for the error functions and Jacobians):
 
 - between (pose-pose):   e_ij = t2v(Z_ij⁻¹ (X_i⁻¹ X_j))
 - pose_landmark:         e_il = R_iᵀ (x_l − t_i) − z_il
@@ -18,7 +18,7 @@ Edge types (see `ekfslam_gym.slam.factors` for the error functions and Jacobians
 
 Each iteration linearises every edge type in one vectorised pass, adds the per-edge blocks JᵀΩJ into the upper
 triangle of H through an index map computed once (the sparsity pattern never changes), and solves H Δx = −b with a
-fill-reducing sparse factorisation whose symbolic analysis is reused (`ekfslam_gym.slam.sparse_solve`).
+fill-reducing sparse factorisation whose symbolic analysis is reused (`ekfslam_gym.graph.sparse_solve`).
 """
 
 from __future__ import annotations

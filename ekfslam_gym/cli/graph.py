@@ -16,8 +16,8 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from .slam.graph import GraphProblem, OptimizationResult, Values, optimize
-from .slam.sparse_solve import BACKENDS
+from ..graph.optimizer import GraphProblem, OptimizationResult, Values, optimize
+from ..graph.sparse_solve import BACKENDS
 
 __all__ = ["main", "plot_solution", "read_graph"]
 
@@ -26,11 +26,11 @@ def read_graph(path: str | os.PathLike[str]) -> GraphProblem:
     """Read a graph file, choosing the format by extension (``.dat`` MAT or ``.g2o`` text)."""
     suffix = Path(path).suffix.lower()
     if suffix == ".dat":
-        from .data.matfile import read_mat_graph
+        from ..data.matfile import read_mat_graph
 
         return read_mat_graph(path)
     if suffix == ".g2o":
-        from .data.g2o import read_g2o
+        from ..data.g2o import read_g2o
 
         return read_g2o(path)
     raise ValueError(f"{path}: unknown graph format {suffix!r} (expected .dat or .g2o)")

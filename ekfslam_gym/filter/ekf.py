@@ -13,7 +13,7 @@ from typing import Literal
 
 import numpy as np
 
-from . import _kernels as K
+from . import kernels as K
 
 COURSE_MOTION_NOISE = np.diag([0.1, 0.1, 0.01])
 COURSE_MEASUREMENT_NOISE = 0.01 * np.eye(2)

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .factors import landmark_from_range_bearing
-from .graph import FactorGraph, OptimizationResult, Values, optimize
+from .optimizer import FactorGraph, OptimizationResult, Values, optimize
 from .se2 import compose, odometry_jacobian, odometry_to_relative, wrap_angle
 
 __all__ = [

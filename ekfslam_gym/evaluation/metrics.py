@@ -20,7 +20,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy import stats
 
-from .angles import wrap_angles
+from ..angles import wrap_angles
 
 __all__ = [
     "ate",

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .factors import range_bearing
-from .se2 import wrap_angle
+from ..graph.factors import range_bearing
+from ..graph.se2 import wrap_angle
 
 __all__ = ["SyntheticDrive", "synthetic_drive"]
 

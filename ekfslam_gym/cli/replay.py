@@ -1,0 +1,340 @@
+"""Replay a drive through EKF-SLAM: the project's simulated drive by default, or course-format files.
+
+    python -m ekfslam_gym.replay [--data PATH [--world PATH]] [--steps N] [--sequential]
+        [--init {course,inverse}] [--seed S] [--json] [--save-state FILE.npz]
+        [--plot FILE.png] [--gif FILE.gif]
+
+Defaults are the course's (sheet 4): R = diag(0.1, 0.1, 0.01) on the pose, Q = 0.01 I per reading, landmark
+prior 1000, zero pose prior at the origin, course initialisation, batch update, every block read (331 steps
+on the course file; ``--steps 330`` gives the course framework's run). Landmark slots follow the sorted world
+ids, or ids 1..max id seen when there is no world file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ekfslam_gym.data.course import CourseData, World, read_sensor_data, read_world
+from ekfslam_gym.data.drive import simulate_drive
+from ekfslam_gym.evaluation.plotting import Belief, Frame
+from ekfslam_gym.filter import EKFSLAM, FilterDivergedError
+
+__all__ = ["ReplayResult", "landmark_labels", "main", "replay", "summary"]
+
+MAX_GIF_FRAMES = 80  # enough for a smooth loop, few enough to render in seconds
+
+
+@dataclass
+class ReplayResult:
+    """The filter after a replay, with what is needed to read its state by the file's landmark ids."""
+
+    ekf: EKFSLAM
+    steps: int
+    labels: np.ndarray  # (n,) file id of each landmark slot
+    world: World | None = None
+    true_poses: np.ndarray | None = None  # (T+1, 3) when the drive is simulated
+    frames: list[Frame] = field(default_factory=list)
+    last_readings: np.ndarray | None = None  # (m, 2) readings of the last step, for the picture
+    est_path: np.ndarray | None = None  # (steps+1, 3) estimated pose after each step
+
+    def landmark_estimates(self) -> dict[int, np.ndarray]:
+        """``{file id: (x, y)}`` of the observed landmarks, by id."""
+        observed = self.ekf.observed
+        landmarks = self.ekf.landmarks
+        return {int(self.labels[i]): landmarks[i].copy() for i in np.flatnonzero(observed)}
+
+    def map_errors(self) -> dict[int, float]:
+        """Distance [m] from each observed landmark's estimate to its truth (empty without a world)."""
+        if self.world is None:
+            return {}
+        truth = self.world.as_dict()
+        return {
+            i: float(np.hypot(*(xy - truth[i]))) for i, xy in self.landmark_estimates().items() if i in truth
+        }
+
+    def map_rmse(self) -> float | None:
+        """Root mean square landmark error [m] over the observed landmarks with a known truth."""
+        errors = list(self.map_errors().values())
+        return float(np.sqrt(np.mean(np.square(errors)))) if errors else None
+
+    def frame(self) -> Frame:
+        """The final belief as a picture frame."""
+        return _frame(self.ekf, self.labels, self.steps, self.last_readings, self.true_poses, self.est_path)
+
+
+def landmark_labels(data: CourseData, world: World | None) -> np.ndarray:
+    """File id of each landmark slot: the sorted world ids, or 1..max id seen without a world.
+
+    Raises ``ValueError`` naming any id the readings use that the world does not have.
+    """
+    if world is None:
+        return np.arange(1, data.max_id + 1, dtype=np.int64)
+    labels = np.sort(world.ids)
+    seen = np.unique(np.concatenate([step.ids for step in data.steps] + [np.zeros(0, np.int64)]))
+    unknown = np.setdiff1d(seen, labels)
+    if len(unknown):
+        raise ValueError(f"readings use landmark id(s) {unknown.tolist()} not in the world file")
+    return labels
+
+
+def _frame(
+    ekf: EKFSLAM,
+    labels: np.ndarray,
+    step: int,
+    readings: np.ndarray | None,
+    true_poses: np.ndarray | None,
+    est_path: np.ndarray | None,
+) -> Frame:
+    belief = Belief(
+        pose=ekf.pose.copy(),
+        pose_cov=ekf.pose_cov.copy(),
+        landmarks=ekf.landmarks.copy(),
+        landmark_covs=ekf.landmark_covs(),
+        observed=ekf.observed.copy(),
+        labels=labels,
+    )
+    return Frame(
+        belief,
+        step=step,
+        readings=readings,
+        true_pose=None if true_poses is None else true_poses[step],
+        true_path=None if true_poses is None else true_poses[: step + 1],
+        est_path=est_path,
+    )
+
+
+def replay(
+    data: CourseData,
+    *,
+    world: World | None = None,
+    steps: int | None = None,
+    update: str = "batch",
+    init_mode: str = "course",
+    true_poses: np.ndarray | None = None,
+    frame_every: int = 0,
+) -> ReplayResult:
+    """Run the course's EKF-SLAM over the first ``steps`` steps of ``data`` (all by default).
+
+    Each step is one prediction with its odometry, then one correction with its readings. ``frame_every`` > 0
+    keeps a picture frame every that many steps (and at the last one) for an animation.
+    """
+    steps = len(data) if steps is None else steps
+    if not 0 < steps <= len(data):
+        raise ValueError(f"steps must be in [1, {len(data)}], got {steps}")
+    labels = landmark_labels(data, world)
+    slot_of = np.full(int(max(labels.max(initial=0), data.max_id)) + 1, -1, dtype=np.int64)
+    slot_of[labels] = np.arange(len(labels))
+
+    ekf = EKFSLAM(
+        len(labels),
+        motion_model="odometry",
+        motion_noise=np.diag([0.1, 0.1, 0.01]),
+        measurement_noise=0.01 * np.eye(2),
+        landmark_prior=1000.0,
+        pose_prior=0.0,
+        init_mode=init_mode,
+        update=update,
+        initial_pose=np.zeros(3),
+    )
+    frames: list[Frame] = []
+    path = np.zeros((steps + 1, 3))
+    for t, block in enumerate(data.steps[:steps], start=1):
+        ekf.predict(block.odometry)
+        if len(block.ids):
+            ekf.correct(slot_of[block.ids], block.z)
+        path[t] = ekf.pose
+        if frame_every > 0 and (t % frame_every == 0 or t == steps):
+            frames.append(_frame(ekf, labels, t, block.z, true_poses, path[: t + 1].copy()))
+    return ReplayResult(ekf, steps, labels, world, true_poses, frames, data.steps[steps - 1].z, path)
+
+
+def summary(result: ReplayResult) -> dict[str, object]:
+    """The ``--json`` object: steps, pose, pose_cov, observed landmarks by file id, log_det (null if -inf)."""
+    log_det = float(result.ekf.log_det)
+    return {
+        "steps": result.steps,
+        "pose": [float(v) for v in result.ekf.pose],
+        "pose_cov": [[float(v) for v in row] for row in result.ekf.pose_cov],
+        "landmarks": {
+            str(i): [float(v) for v in xy] for i, xy in sorted(result.landmark_estimates().items())
+        },
+        "log_det": log_det if math.isfinite(log_det) else None,
+    }
+
+
+def _report(result: ReplayResult, source: str, n_readings: int) -> str:
+    ekf = result.ekf
+    x, y, theta = ekf.pose
+    lines = [
+        f"EKF-SLAM replay of {source}: {result.steps} steps, {n_readings} readings, "
+        f"{int(ekf.observed.sum())} of {len(result.labels)} landmarks observed",
+        f"final pose       x = {x:.6f} m, y = {y:.6f} m, theta = {theta:.6f} rad",
+        "pose cov diag    " + ", ".join(f"{v:.6g}" for v in np.diagonal(ekf.pose_cov)),
+    ]
+    if result.true_poses is not None:
+        tx, ty, tt = result.true_poses[result.steps]
+        heading_error = (theta - tt + np.pi) % (2.0 * np.pi) - np.pi
+        lines.append(
+            f"true pose        x = {tx:.6f} m, y = {ty:.6f} m, theta = {tt:.6f} rad "
+            f"(error {math.hypot(x - tx, y - ty):.4f} m, {abs(heading_error):.4f} rad)"
+        )
+    lines.append(f"log det Sigma    {ekf.log_det:.6f}")
+    truth = result.world.as_dict() if result.world is not None else {}
+    lines.append("landmarks        id: estimate" + ("  [truth]  error" if truth else ""))
+    for i, (lx, ly) in sorted(result.landmark_estimates().items()):
+        line = f"  {i:>4}: ({lx:9.5f}, {ly:9.5f})"
+        if i in truth:
+            tx, ty = truth[i]
+            line += f"  [{tx:9.5f}, {ty:9.5f}]  {math.hypot(lx - tx, ly - ty):.4f} m"
+        lines.append(line)
+    rmse = result.map_rmse()
+    if rmse is not None:
+        lines.append(f"map RMSE vs world: {rmse:.4f} m over {len(result.map_errors())} landmarks")
+    return "\n".join(lines)
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="python -m ekfslam_gym.replay",
+        description="Replay a drive through EKF-SLAM with the course's parameters. Without --data it replays "
+        "the project's simulated drive (seeded by --seed).",
+    )
+    parser.add_argument("--data", type=Path, metavar="PATH", help="a sensor_data.dat file (course format)")
+    parser.add_argument(
+        "--world", type=Path, metavar="PATH", help="its world.dat (true landmarks; sets the landmark slots)"
+    )
+    parser.add_argument(
+        "--seed", type=int, metavar="S", help="seed of the simulated drive (default 0; not with --data)"
+    )
+    parser.add_argument(
+        "--steps", type=int, metavar="N", help="replay only the first N steps (default: every block)"
+    )
+    parser.add_argument("--sequential", action="store_true", help="one update per reading instead of a batch")
+    parser.add_argument(
+        "--init",
+        choices=("course", "inverse"),
+        default="course",
+        help="landmark initialisation (default course)",
+    )
+    parser.add_argument("--json", action="store_true", help="print one JSON object to stdout, nothing else")
+    parser.add_argument("--save-state", type=Path, metavar="FILE.npz", help="write mean, cov and log_det")
+    parser.add_argument("--plot", type=Path, metavar="FILE.png", help="draw the final belief")
+    parser.add_argument("--gif", type=Path, metavar="FILE.gif", help="animate the belief over the drive")
+    return parser
+
+
+def _check_output(parser: argparse.ArgumentParser, path: Path | None, suffix: str, option: str) -> None:
+    if path is None:
+        return
+    if path.suffix.lower() != suffix:
+        parser.error(f"{option} needs a {suffix} file name, got {path}")
+    if not path.parent.is_dir():
+        parser.error(f"{option}: directory {path.parent} does not exist")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command-line entry point; returns the exit status (usage errors exit 2 through ``parser.error``)."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    if args.world is not None and args.data is None:
+        parser.error("--world needs --data (the simulated drive brings its own world)")
+    if args.seed is not None and args.data is not None:
+        parser.error("--seed applies to the simulated drive only, not to --data")
+    if args.steps is not None and args.steps <= 0:
+        parser.error(f"--steps must be a positive number of steps, got {args.steps}")
+    _check_output(parser, args.save_state, ".npz", "--save-state")
+    _check_output(parser, args.plot, ".png", "--plot")
+    _check_output(parser, args.gif, ".gif", "--gif")
+    if args.plot is not None or args.gif is not None:
+        try:
+            import matplotlib  # noqa: F401
+
+            if args.gif is not None:
+                import imageio  # noqa: F401
+        except ImportError as error:
+            parser.error(f"--plot/--gif need the render extra (pip install 'ekfslam-gym[render]'): {error}")
+
+    true_poses = None
+    if args.data is None:
+        seed = 0 if args.seed is None else args.seed
+        drive = simulate_drive(seed)
+        data, world, true_poses = drive.data, drive.world, drive.poses
+        source = f"the simulated drive (seed {seed})"
+    else:
+        try:
+            for path in (args.data, args.world):
+                if path is not None and not path.is_file():
+                    parser.error(f"no such file: {path}")
+            data = read_sensor_data(args.data)
+            world = read_world(args.world) if args.world is not None else None
+        except (OSError, ValueError) as error:
+            parser.error(str(error))
+        source = str(args.data)
+    if not len(data):
+        parser.error(f"{source} has no ODOMETRY block")
+    steps = len(data) if args.steps is None else args.steps
+    if steps > len(data):
+        parser.error(f"--steps {steps} but {source} has only {len(data)} steps")
+
+    frame_every = math.ceil(steps / MAX_GIF_FRAMES) if args.gif is not None else 0
+    try:
+        result = replay(
+            data,
+            world=world,
+            steps=steps,
+            update="sequential" if args.sequential else "batch",
+            init_mode=args.init,
+            true_poses=true_poses,
+            frame_every=frame_every,
+        )
+    except ValueError as error:  # an id outside the world file
+        parser.error(f"{args.data}: {error}")
+    except FilterDivergedError as error:
+        print(f"error: the filter diverged: {error}", file=sys.stderr)
+        return 1
+
+    written = _write_outputs(args, result)
+    if args.json:
+        print(json.dumps(summary(result), allow_nan=False))
+        for line in written:
+            print(line, file=sys.stderr)
+    else:
+        print(_report(result, source, data.head(steps).n_readings))
+        for line in written:
+            print(line)
+    return 0
+
+
+def _write_outputs(args: argparse.Namespace, result: ReplayResult) -> list[str]:
+    from ekfslam_gym.evaluation import plotting
+
+    written = []
+    if args.save_state is not None:
+        np.savez(
+            args.save_state,
+            mean=np.asarray(result.ekf.mean),
+            cov=np.asarray(result.ekf.cov),
+            log_det=np.float64(result.ekf.log_det),
+            landmark_ids=result.labels,
+            observed=np.asarray(result.ekf.observed),
+        )
+        written.append(f"wrote state to {args.save_state}")
+    if args.plot is not None:
+        plotting.save_png(args.plot, result.frame(), result.world)
+        written.append(f"wrote picture to {args.plot}")
+    if args.gif is not None:
+        plotting.save_gif(args.gif, result.frames, result.world)
+        written.append(f"wrote animation ({len(result.frames)} frames) to {args.gif}")
+    return written
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

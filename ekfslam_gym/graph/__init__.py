@@ -1,0 +1,25 @@
+"""Graph-based least-squares SLAM: SE(2) algebra, factors, the sparse linear system, sparse solvers, the
+Gauss-Newton / Levenberg-Marquardt optimiser, and the smoother that turns a recorded drive into a graph.
+
+``python -m ekfslam_gym.graph FILE`` optimises a ``.dat``/``.g2o`` graph (see ``ekfslam_gym.cli.graph``).
+"""
+
+from .optimizer import (
+    FactorGraph,
+    GraphProblem,
+    OptimizationResult,
+    Values,
+    gauss_newton,
+    levenberg_marquardt,
+    optimize,
+)
+
+__all__ = [
+    "FactorGraph",
+    "GraphProblem",
+    "OptimizationResult",
+    "Values",
+    "gauss_newton",
+    "levenberg_marquardt",
+    "optimize",
+]
