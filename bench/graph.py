@@ -34,11 +34,11 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ekfslam_gym.data.g2o import read_g2o  # noqa: E402
-from ekfslam_gym.graph.optimizer import FactorGraph, Values, gauss_newton, levenberg_marquardt  # noqa: E402
+from ekfslam_gym.data.synthetic import synthetic_drive  # noqa: E402
 from ekfslam_gym.graph.linear_system import NormalEquations  # noqa: E402
+from ekfslam_gym.graph.optimizer import FactorGraph, Values, gauss_newton, levenberg_marquardt  # noqa: E402
 from ekfslam_gym.graph.smoother import build_drive_graph  # noqa: E402
 from ekfslam_gym.graph.sparse_solve import available_backends, make_solver  # noqa: E402
-from ekfslam_gym.data.synthetic import synthetic_drive  # noqa: E402
 
 try:
     import gtsam

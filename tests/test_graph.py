@@ -12,8 +12,8 @@ import pytest
 from ekfslam_gym.cli.graph import main as graph_cli
 from ekfslam_gym.graph import factors as F
 from ekfslam_gym.graph import se2
-from ekfslam_gym.graph.optimizer import FactorGraph, Values, gauss_newton, levenberg_marquardt, optimize
 from ekfslam_gym.graph.linear_system import NormalEquations, sqrt_information
+from ekfslam_gym.graph.optimizer import FactorGraph, Values, gauss_newton, levenberg_marquardt, optimize
 from ekfslam_gym.graph.sparse_solve import available_backends, make_solver
 
 # --------------------------------------------------------------------------------------------------------------

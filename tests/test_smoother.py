@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ekfslam_gym.data.synthetic import synthetic_drive
 from ekfslam_gym.graph import se2
 from ekfslam_gym.graph.smoother import dead_reckoning, odometry_edge_covariance, smooth_drive
-from ekfslam_gym.data.synthetic import synthetic_drive
 
 
 def ate(estimate: np.ndarray, truth: np.ndarray) -> float:

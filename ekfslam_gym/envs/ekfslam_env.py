@@ -12,9 +12,9 @@ import numpy as np
 from gymnasium import spaces
 from numba import njit
 
+from ..filter.ekf import EKFSLAM, FilterDivergedError
 from ..sim.layouts import make_layout
 from ..sim.world import World
-from ..filter.ekf import EKFSLAM, FilterDivergedError
 from .config import EnvConfig
 from .observation import CLIP, fill_observation, make_memory, mark_coverage, observation_layout
 
