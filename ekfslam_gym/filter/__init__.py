@@ -4,7 +4,6 @@ Knows nothing of the simulator or the env; ``ekfslam_gym.graph`` is the offline 
 """
 
 from .ekf import COURSE_MEASUREMENT_NOISE, COURSE_MOTION_NOISE, EKFSLAM, FilterDivergedError
-from .models import inverse_range_bearing, odometry_motion, range_bearing, velocity_motion, wrap_angle
 
 __all__ = [
     "COURSE_MEASUREMENT_NOISE",
@@ -17,3 +16,14 @@ __all__ = [
     "velocity_motion",
     "wrap_angle",
 ]
+
+_MODELS = ("inverse_range_bearing", "odometry_motion", "range_bearing", "velocity_motion", "wrap_angle")
+
+
+def __getattr__(name: str):
+    # The models are numba functions: loaded on first use, so that the env's start-up never loads numba.
+    if name in _MODELS:
+        from . import models
+
+        return getattr(models, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

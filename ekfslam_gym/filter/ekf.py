@@ -1,7 +1,7 @@
 """EKF-SLAM with known correspondences, a fixed number of landmarks and an exact running log det Sigma.
 
 The state is mu = (x, y, theta, m1x, m1y, ..., mnx, mny), N = 3 + 2n, with covariance Sigma. The heavy lifting
-is in ``_kernels`` (compiled, touching only what changes); this class validates input, holds the state and
+is in ``kernels`` (compiled, touching only what changes); this class validates input, holds the state and
 keeps the log-determinant bookkeeping honest (start it from a Cholesky once Sigma is definite, re-synchronise
 every ``resync_every`` filter calls to bound rounding drift).
 """
@@ -13,7 +13,9 @@ from typing import Literal
 
 import numpy as np
 
-from . import kernels as K
+from .. import compiled
+from ..angles import wrap_angle
+from . import codes
 
 COURSE_MOTION_NOISE = np.diag([0.1, 0.1, 0.01])
 COURSE_MEASUREMENT_NOISE = 0.01 * np.eye(2)
@@ -130,13 +132,13 @@ class EKFSLAM:
             if pose.shape != (3,) or not np.all(np.isfinite(pose)):
                 raise ValueError(f"initial_pose must be 3 finite numbers, got {initial_pose!r}")
             self._mean[:3] = pose
-            self._mean[2] = K.wrap_angle(pose[2])
+            self._mean[2] = wrap_angle(pose[2])
         self._cov = np.zeros((size, size))
         self._cov[:3, :3] = pose_cov0
         idx = np.arange(3, size)
         self._cov[idx, idx] = self.landmark_prior
         self._observed = np.zeros(self.n_landmarks, dtype=bool)
-        self._model_code = K.MODEL_ODOMETRY if motion_model == "odometry" else K.MODEL_VELOCITY
+        self._model_code = codes.MODEL_ODOMETRY if motion_model == "odometry" else codes.MODEL_VELOCITY
         self._control = np.zeros(3)
         self._P = np.zeros((3, 3))
         self._log_det = -np.inf
@@ -220,7 +222,7 @@ class EKFSLAM:
         mapped through V M V^T); neither means the constructor's ``motion_noise``.
         """
         control = np.asarray(control, dtype=float)
-        width = 3 if self._model_code == K.MODEL_ODOMETRY else 2
+        width = 3 if self._model_code == codes.MODEL_ODOMETRY else 2
         if control.shape != (width,):
             raise ValueError(
                 f"control must be {width} numbers for the {self.motion_model} model, got {control!r}"
@@ -236,11 +238,11 @@ class EKFSLAM:
             if noise.shape != (3, 3):
                 raise ValueError(f"motion_cov must be (3, 3), got {noise.shape}")
             in_control_space = False
-        delta, status = K.predict(
+        delta, status = compiled.predict(
             self._mean, self._cov, self._P, self._model_code, self._control, self.dt,
             np.ascontiguousarray(noise), in_control_space, self._tracking,
         )  # fmt: skip
-        if status == K.BAD_INPUT:
+        if status == codes.BAD_INPUT:
             raise ValueError(f"control and its noise must be finite, got {control!r}")
         self._after_call(delta)
         return delta
@@ -252,7 +254,7 @@ class EKFSLAM:
         need not be wrapped: the innovation is. Raises ``FilterDivergedError`` if an innovation covariance is
         not positive definite.
         """
-        ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+        ids = np.ascontiguousarray(np.asarray(ids, dtype=np.int64).reshape(-1))
         readings = np.asarray(readings, dtype=float).reshape(-1, 2) if len(ids) else np.empty((0, 2))
         if readings.shape[0] != ids.shape[0]:
             raise ValueError(f"{ids.shape[0]} ids but {readings.shape[0]} readings")
@@ -261,15 +263,15 @@ class EKFSLAM:
             if measurement_cov is None
             else _as_covariance(measurement_cov, 2, "measurement_cov")
         )
-        delta, status, _ = K.correct(
+        delta, status, _ = compiled.correct(
             self._mean, self._cov, self._P, self._observed, ids, np.ascontiguousarray(readings), Q,
             self.min_range, self.init_mode == "course", self.update_mode == "sequential", self._tracking,
         )  # fmt: skip
-        if status == K.BAD_ID:
+        if status == codes.BAD_ID:
             raise ValueError(f"landmark ids must lie in [0, {self.n_landmarks}), got {ids.tolist()}")
-        if status == K.BAD_INPUT:
+        if status == codes.BAD_INPUT:
             raise ValueError("readings must be finite")
-        if status == K.NOT_PD:
+        if status == codes.NOT_PD:
             raise FilterDivergedError("innovation covariance is not positive definite")
         self._after_call(delta)
         return delta

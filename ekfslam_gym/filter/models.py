@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..angles import wrap_angle
+from ..angles import compiled_wrap_angle as wrap_angle
 
 
 @njit(cache=True)

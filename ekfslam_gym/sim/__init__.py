@@ -10,8 +10,6 @@ from .odometry import (
     VelocityNoise,
     VelocityReading,
     compose_odometry,
-    decompose_odometry,
-    velocity_from_motion,
 )
 from .robot import RobotParams
 from .sensor import RangeBearingSensor, Readings, SensorParams
@@ -35,3 +33,12 @@ __all__ = [
     "place_landmarks",
     "velocity_from_motion",
 ]
+
+
+def __getattr__(name: str):
+    # The compiled odometry helpers: loaded (with numba) on first use, never at import.
+    if name in ("decompose_odometry", "velocity_from_motion"):
+        from . import odometry_kernels
+
+        return getattr(odometry_kernels, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -17,7 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..angles import wrap_angle
+from ..angles import compiled_wrap_angle as wrap_angle
 
 TWO_PI = 2.0 * math.pi
 
@@ -233,3 +233,49 @@ def cast_rays(
             if s < best:
                 best = s
         out[i] = best
+
+
+@njit(cache=True)
+def accept_spaced(candidates: np.ndarray, accepted: np.ndarray, count: int, spacing2: float) -> int:
+    """Greedily append candidates at least sqrt(spacing2) m from every accepted point, in order, until
+    ``accepted`` is full; returns the new count."""
+    for i in range(candidates.shape[0]):
+        if count == accepted.shape[0]:
+            break
+        ok = True
+        for j in range(count):
+            dx = accepted[j, 0] - candidates[i, 0]
+            dy = accepted[j, 1] - candidates[i, 1]
+            if dx * dx + dy * dy < spacing2:
+                ok = False
+                break
+        if ok:
+            accepted[count, 0] = candidates[i, 0]
+            accepted[count, 1] = candidates[i, 1]
+            count += 1
+    return count
+
+
+@njit(cache=True)
+def connected_component(free: np.ndarray, row: int, col: int) -> np.ndarray:
+    """The cells of the boolean grid ``free`` 4-connected to (row, col) (which must be free), by flood fill."""
+    rows, cols = free.shape
+    component = np.zeros((rows, cols), dtype=np.bool_)
+    stack = np.empty((rows * cols, 2), dtype=np.int64)
+    stack[0, 0] = row
+    stack[0, 1] = col
+    component[row, col] = True
+    top = 1
+    while top > 0:
+        top -= 1
+        r = stack[top, 0]
+        c = stack[top, 1]
+        for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+            nr = r + dr
+            nc = c + dc
+            if 0 <= nr < rows and 0 <= nc < cols and free[nr, nc] and not component[nr, nc]:
+                component[nr, nc] = True
+                stack[top, 0] = nr
+                stack[top, 1] = nc
+                top += 1
+    return component

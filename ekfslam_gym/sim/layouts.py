@@ -16,10 +16,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
-from scipy import ndimage
 
-from .geometry import min_wall_distance
+from .. import compiled
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,34 +76,12 @@ def _reachable_grid(
     xs = bounds[0] + (np.arange(nx) + 0.5) * cell
     ys = bounds[1] + (np.arange(ny) + 0.5) * cell
     centres = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-    free = (min_wall_distance(centres, walls) >= clearance + 0.5 * cell).reshape(ny, nx)
-    labels, _ = ndimage.label(free)
+    free = (compiled.min_wall_distance(centres, walls) >= clearance + 0.5 * cell).reshape(ny, nx)
     i = int((start_xy[1] - bounds[1]) // cell)
     j = int((start_xy[0] - bounds[0]) // cell)
-    if not (0 <= i < ny and 0 <= j < nx) or labels[i, j] == 0:
+    if not (0 <= i < ny and 0 <= j < nx) or not free[i, j]:
         raise ValueError("the start pose is not in free space (too close to a wall)")
-    return labels == labels[i, j], bounds[:2].copy()
-
-
-@njit(cache=True)
-def _accept_spaced(candidates: np.ndarray, accepted: np.ndarray, count: int, spacing2: float) -> int:
-    """Greedily append candidates at least sqrt(spacing2) m from every accepted point, in order, until
-    ``accepted`` is full; returns the new count."""
-    for i in range(candidates.shape[0]):
-        if count == accepted.shape[0]:
-            break
-        ok = True
-        for j in range(count):
-            dx = accepted[j, 0] - candidates[i, 0]
-            dy = accepted[j, 1] - candidates[i, 1]
-            if dx * dx + dy * dy < spacing2:
-                ok = False
-                break
-        if ok:
-            accepted[count, 0] = candidates[i, 0]
-            accepted[count, 1] = candidates[i, 1]
-            count += 1
-    return count
+    return compiled.connected_component(free, i, j), bounds[:2].copy()
 
 
 def place_landmarks(
@@ -156,12 +132,12 @@ def place_landmarks(
         size = min(batch, max_candidates - drawn)
         candidates = lo + (hi - lo) * rng.random((size, 2))
         drawn += size
-        ok = min_wall_distance(candidates, walls) >= landmark_clearance
+        ok = compiled.min_wall_distance(candidates, walls) >= landmark_clearance
         cells = ((candidates - origin) // cell).astype(np.int64)
         ok &= reachable[
             cells[:, 1].clip(0, reachable.shape[0] - 1), cells[:, 0].clip(0, reachable.shape[1] - 1)
         ]
-        count = _accept_spaced(candidates[ok], accepted, count, spacing2)
+        count = compiled.accept_spaced(candidates[ok], accepted, count, spacing2)
     if count < n_landmarks:
         raise ValueError(
             f"could place only {count} of {n_landmarks} landmarks with min_spacing={min_spacing} m and "
@@ -182,7 +158,7 @@ def _start_pose(
     """A pose uniform in the box [lo, hi] at least ``clearance`` from every wall; uniform heading unless given."""
     for _ in range(1000):
         xy = lo + (hi - lo) * rng.random(2)
-        if min_wall_distance(xy[None, :], walls)[0] >= clearance:
+        if compiled.min_wall_distance(xy[None, :], walls)[0] >= clearance:
             theta = rng.uniform(-math.pi, math.pi) if heading is None else heading
             return np.array([xy[0], xy[1], theta])
     raise ValueError(f"found no start pose with clearance {clearance} m")
@@ -336,7 +312,7 @@ def loop(
         start = np.array([width * u, height - 0.5 * top, math.pi])
     else:
         start = np.array([0.5 * left, height * u, -0.5 * math.pi])
-    if min_wall_distance(start[None, :2], walls)[0] < start_clearance:
+    if compiled.min_wall_distance(start[None, :2], walls)[0] < start_clearance:
         raise ValueError(f"the start pose has less than {start_clearance} m clearance")
     landmarks = place_landmarks(
         rng, n_landmarks, walls, bounds, start, min_spacing=min_spacing,

@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .geometry import add_reading_noise, cast_rays, visible_landmarks
+from .. import compiled
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,7 @@ class RangeBearingSensor:
     def true_readings(self, pose: tuple[float, float, float]) -> Readings:
         """Noise-free readings from pose (x m, y m, theta rad): what the sensor would see exactly."""
         p = self.params
-        m = visible_landmarks(
+        m = compiled.visible_landmarks(
             pose[0], pose[1], pose[2], self.landmarks, self.walls, self.wall_radius,
             p.min_range, p.max_range, self._half_fov, self._ids, self._z,
         )  # fmt: skip
@@ -100,7 +100,9 @@ class RangeBearingSensor:
         """Noisy readings from pose (x m, y m, theta rad); noise drawn from ``rng``, (m, 2) normals in id order."""
         ids, z = self.true_readings(pose)
         if z.shape[0]:
-            add_reading_noise(z, rng.standard_normal(z.shape), self.params.range_std, self.params.bearing_std)
+            compiled.add_reading_noise(
+                z, rng.standard_normal(z.shape), self.params.range_std, self.params.bearing_std
+            )
         return Readings(ids, z)
 
     def scan(self, pose: tuple[float, float, float]) -> np.ndarray:
@@ -109,7 +111,7 @@ class RangeBearingSensor:
         Beam i points at heading + 2 pi i / n_beams (counter-clockwise, beam 0 straight ahead).
         """
         out = np.empty(self.beam_angles.shape[0])
-        cast_rays(
+        compiled.cast_rays(
             pose[0], pose[1], pose[2], self.beam_angles, self.walls, self.wall_radius,
             self.params.scan_max_range, out,
         )  # fmt: skip

@@ -20,7 +20,8 @@ from typing import Any
 import numpy as np
 import pymunk
 
-from .geometry import min_wall_distance, wrap_angle
+from .. import compiled
+from ..angles import wrap_angle
 from .layouts import Layout
 from .odometry import (
     OdometryNoise,
@@ -79,7 +80,9 @@ class World:
             )
         start = layout.start
         clearance = (
-            float(min_wall_distance(start[None, :2], layout.walls)[0]) if len(layout.walls) else math.inf
+            float(compiled.min_wall_distance(start[None, :2], layout.walls)[0])
+            if len(layout.walls)
+            else math.inf
         )
         if clearance < rp.radius + layout.wall_radius:
             raise ValueError(f"the robot (radius {rp.radius} m) overlaps a wall at the layout's start pose")

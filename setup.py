@@ -1,0 +1,58 @@
+"""Build hook: compile the env's hot-path numba kernels ahead of time into ``ekfslam_gym._aot``.
+
+Everything else about the package is in ``pyproject.toml``. ``ekfslam_gym/compiled.py`` lists the kernels and
+their signatures and explains why; this only runs ``numba.pycc`` over them at install time. If that fails (no
+compiler, a numba without ``pycc``), the install goes on and the package uses numba's JIT instead.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import sys
+import types
+from pathlib import Path
+
+from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
+
+PACKAGE = Path(__file__).resolve().parent / "ekfslam_gym"
+AOT = "ekfslam_gym._aot"
+
+
+def _kernel_table():
+    """``ekfslam_gym.compiled`` imported without running the package ``__init__`` files (gymnasium, pymunk
+    and SB3 are not build dependencies; only numpy and numba are)."""
+    os.environ["EKFSLAM_GYM_JIT"] = "1"  # do not load a stale extension while building a new one
+    for name in ("ekfslam_gym", "ekfslam_gym.sim", "ekfslam_gym.filter"):
+        stub = types.ModuleType(name)
+        stub.__path__ = [str(PACKAGE.joinpath(*name.split(".")[1:]))]
+        sys.modules[name] = stub
+    return importlib.import_module("ekfslam_gym.compiled")
+
+
+class BuildKernels(build_ext):
+    def build_extension(self, ext: Extension) -> None:
+        if ext.name != AOT:
+            super().build_extension(ext)
+            return
+        target = Path(self.get_ext_fullpath(ext.name))
+        try:
+            from numba.pycc import CC
+
+            compiled = _kernel_table()
+            cc = CC(target.name.split(".")[0], "ekfslam_gym.compiled")
+            cc.output_dir = str(target.parent)
+            cc.output_file = target.name
+            for name, (module, function, signature) in compiled.KERNELS.items():
+                cc.export(name, signature)(getattr(importlib.import_module(module), function).py_func)
+            cc.export("aot_digest", "UniTuple(i8, 4)()")(compiled.digest_kernel(compiled.sources_digest()))
+            cc.compile()
+        except Exception as error:  # the JIT fallback keeps the package working
+            print(
+                f"warning: ahead-of-time kernels not built ({error!r}); numba's JIT will be used",
+                file=sys.stderr,
+            )
+
+
+setup(ext_modules=[Extension(AOT, sources=[], optional=True)], cmdclass={"build_ext": BuildKernels})
