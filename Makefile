@@ -21,7 +21,18 @@ $(STAMP): pyproject.toml | $(BIN)/python
 	$(PIP) install -q --progress-bar off -e ".[$(EXTRAS)]"
 	touch $@
 
-install: $(STAMP)
+# The hot-path kernels are compiled ahead of time by setup.py (see ekfslam_gym/compiled.py); rebuild them in
+# place whenever their sources change, or the package falls back to numba's JIT (correct, slower to start).
+KERNEL_SOURCES := setup.py ekfslam_gym/compiled.py $(wildcard ekfslam_gym/angles.py ekfslam_gym/*/*kernels*.py \
+	ekfslam_gym/filter/models.py ekfslam_gym/filter/codes.py ekfslam_gym/sim/geometry.py)
+AOT_STAMP := $(VENV)/.aot-kernels
+
+$(AOT_STAMP): $(STAMP) $(KERNEL_SOURCES)
+	$(BIN)/python -W ignore -c "from ekfslam_gym import compiled; raise SystemExit(compiled.backend() != 'aot')" \
+		|| $(BIN)/python setup.py -q build_ext --inplace 2>&1 | grep -v -i "deprecat\|^ \|^!!\|^$$" || true
+	touch $@
+
+install: $(STAMP) $(AOT_STAMP)
 
 demo: install
 	$(BIN)/python demo.py --out out
