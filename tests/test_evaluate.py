@@ -7,16 +7,11 @@ import math
 
 import pytest
 
-from ekfslam_gym.cli.evaluate import (
-    HELD_OUT_SEEDS,
-    METRIC_KEYS,
-    aggregate,
-    evaluate_agent,
-    main,
-    markdown_table,
-    parse_seeds,
-    summary,
-)
+from ekfslam_gym.cli.common import parse_seeds
+from ekfslam_gym.cli.evaluate import main
+from ekfslam_gym.evaluation.aggregate import aggregate, summary
+from ekfslam_gym.evaluation.episodes import HELD_OUT_SEEDS, METRIC_KEYS, evaluate_agent
+from ekfslam_gym.evaluation.report import markdown_table
 
 SHORT = ["--seeds", "0-1", "--max-episode-steps", "20", "--no-progress"]
 
@@ -94,7 +89,7 @@ def test_evaluate_agent_is_reproducible_and_paired():
 
 
 def test_max_episode_steps_goes_into_the_env_config():
-    from ekfslam_gym.cli.evaluate import make_env
+    from ekfslam_gym.evaluation.episodes import make_env
 
     env = make_env("EKFSLAM-Loop-v0", max_episode_steps=12)
     assert env.unwrapped.config.max_episode_steps == 12
@@ -125,7 +120,6 @@ def test_episode_metrics_are_consistent_with_the_env():
 def test_smoother_option_reports_the_smoothed_episode_beside_the_filter(capsys):
     import json
 
-    from ekfslam_gym.cli.evaluate import main
 
     assert main(["--agent", "circle", "--seeds", "10000", "--smoother", "--json", "--no-progress"]) == 0
     out = json.loads(capsys.readouterr().out)

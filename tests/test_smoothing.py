@@ -6,13 +6,16 @@ import pytest
 
 import ekfslam_gym  # noqa: F401
 from agents import make_agent
-from ekfslam_gym.cli.smoothing import EpisodeRecorder, compare_with_smoother, main, run_episode
+from ekfslam_gym.cli.smoothing import main
+from ekfslam_gym.evaluation.episodes import EpisodeRecorder, run_episode
+from ekfslam_gym.evaluation.smoothing import compare_with_smoother
 
 
 @pytest.mark.parametrize("seed", [10000, 10001])
 def test_smoothing_an_env_episode_beats_the_filter_on_ate(seed):
     env = gym.make("EKFSLAM-v0")  # 500 steps: the circle closes its loop
-    recorder = run_episode(env, make_agent("circle"), seed)
+    recorder = EpisodeRecorder()
+    run_episode(env, make_agent("circle"), seed, recording=recorder)
     assert len(recorder.odometry) == 500 and len(recorder.readings) == 501
     result = compare_with_smoother(recorder, env)
     assert result["smoother_ate"] < 0.7 * result["filter_ate"], result
