@@ -10,8 +10,8 @@ import pytest
 
 from ekfslam_gym.data.course import (
     CourseData,
+    LandmarkMap,
     Step,
-    World,
     read_sensor_data,
     read_world,
     write_sensor_data,
@@ -161,7 +161,7 @@ def test_writer_round_trip_is_exact(tmp_path):
         np.testing.assert_array_equal(a.ids, b.ids)
         assert a.z.tobytes() == b.z.tobytes()
 
-    world = World(np.array([9, 2, 5]), rng.normal(size=(3, 2)) * 1e3)
+    world = LandmarkMap(np.array([9, 2, 5]), rng.normal(size=(3, 2)) * 1e3)
     world_back = read_world(write_world(tmp_path / "w.dat", world))
     np.testing.assert_array_equal(world_back.ids, [9, 2, 5])  # file order kept
     assert world_back.positions.tobytes() == world.positions.tobytes()
@@ -182,4 +182,4 @@ def test_step_and_world_validate_shapes():
     with pytest.raises(ValueError, match="2 ids but 1 readings"):
         Step(np.zeros(3), np.array([1, 2]), np.zeros((1, 2)))
     with pytest.raises(ValueError, match="not distinct"):
-        World(np.array([1, 1]), np.zeros((2, 2)))
+        LandmarkMap(np.array([1, 1]), np.zeros((2, 2)))

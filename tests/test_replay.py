@@ -7,9 +7,10 @@ import json
 import numpy as np
 import pytest
 
-from ekfslam_gym.cli.replay import main, replay
+from ekfslam_gym.cli.replay import main
 from ekfslam_gym.data.course import read_sensor_data, read_world
 from ekfslam_gym.data.drive import simulate_drive
+from ekfslam_gym.evaluation.replay import replay
 from tests.datapaths import freiburg_dir
 
 

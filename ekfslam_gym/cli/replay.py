@@ -4,7 +4,7 @@
         [--init {course,inverse}] [--seed S] [--json] [--save-state FILE.npz]
         [--plot FILE.png] [--gif FILE.gif]
 
-Defaults are the course's (sheet 4): R = diag(0.1, 0.1, 0.01) on the pose, Q = 0.01 I per reading, landmark
+Defaults are the course's EKF-SLAM exercise (Freiburg *Robot Mapping*): R = diag(0.1, 0.1, 0.01) on the pose, Q = 0.01 I per reading, landmark
 prior 1000, zero pose prior at the origin, course initialisation, batch update, every block read (331 steps
 on the course file; ``--steps 330`` gives the course framework's run). Landmark slots follow the sorted world
 ids, or ids 1..max id seen when there is no world file.
@@ -17,157 +17,17 @@ import json
 import math
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ekfslam_gym.data.course import CourseData, World, read_sensor_data, read_world
-from ekfslam_gym.data.drive import simulate_drive
-from ekfslam_gym.evaluation.plotting import Belief, Frame
-from ekfslam_gym.filter import EKFSLAM, FilterDivergedError
-
-__all__ = ["ReplayResult", "landmark_labels", "main", "replay", "summary"]
+from ..angles import wrap_angle
+from ..data.course import read_sensor_data, read_world
+from ..data.drive import simulate_drive
+from ..evaluation.replay import ReplayResult, replay, summary
+from ..filter import FilterDivergedError
 
 MAX_GIF_FRAMES = 80  # enough for a smooth loop, few enough to render in seconds
-
-
-@dataclass
-class ReplayResult:
-    """The filter after a replay, with what is needed to read its state by the file's landmark ids."""
-
-    ekf: EKFSLAM
-    steps: int
-    labels: np.ndarray  # (n,) file id of each landmark slot
-    world: World | None = None
-    true_poses: np.ndarray | None = None  # (T+1, 3) when the drive is simulated
-    frames: list[Frame] = field(default_factory=list)
-    last_readings: np.ndarray | None = None  # (m, 2) readings of the last step, for the picture
-    est_path: np.ndarray | None = None  # (steps+1, 3) estimated pose after each step
-
-    def landmark_estimates(self) -> dict[int, np.ndarray]:
-        """``{file id: (x, y)}`` of the observed landmarks, by id."""
-        observed = self.ekf.observed
-        landmarks = self.ekf.landmarks
-        return {int(self.labels[i]): landmarks[i].copy() for i in np.flatnonzero(observed)}
-
-    def map_errors(self) -> dict[int, float]:
-        """Distance [m] from each observed landmark's estimate to its truth (empty without a world)."""
-        if self.world is None:
-            return {}
-        truth = self.world.as_dict()
-        return {
-            i: float(np.hypot(*(xy - truth[i]))) for i, xy in self.landmark_estimates().items() if i in truth
-        }
-
-    def map_rmse(self) -> float | None:
-        """Root mean square landmark error [m] over the observed landmarks with a known truth."""
-        errors = list(self.map_errors().values())
-        return float(np.sqrt(np.mean(np.square(errors)))) if errors else None
-
-    def frame(self) -> Frame:
-        """The final belief as a picture frame."""
-        return _frame(self.ekf, self.labels, self.steps, self.last_readings, self.true_poses, self.est_path)
-
-
-def landmark_labels(data: CourseData, world: World | None) -> np.ndarray:
-    """File id of each landmark slot: the sorted world ids, or 1..max id seen without a world.
-
-    Raises ``ValueError`` naming any id the readings use that the world does not have.
-    """
-    if world is None:
-        return np.arange(1, data.max_id + 1, dtype=np.int64)
-    labels = np.sort(world.ids)
-    seen = np.unique(np.concatenate([step.ids for step in data.steps] + [np.zeros(0, np.int64)]))
-    unknown = np.setdiff1d(seen, labels)
-    if len(unknown):
-        raise ValueError(f"readings use landmark id(s) {unknown.tolist()} not in the world file")
-    return labels
-
-
-def _frame(
-    ekf: EKFSLAM,
-    labels: np.ndarray,
-    step: int,
-    readings: np.ndarray | None,
-    true_poses: np.ndarray | None,
-    est_path: np.ndarray | None,
-) -> Frame:
-    belief = Belief(
-        pose=ekf.pose.copy(),
-        pose_cov=ekf.pose_cov.copy(),
-        landmarks=ekf.landmarks.copy(),
-        landmark_covs=ekf.landmark_covs(),
-        observed=ekf.observed.copy(),
-        labels=labels,
-    )
-    return Frame(
-        belief,
-        step=step,
-        readings=readings,
-        true_pose=None if true_poses is None else true_poses[step],
-        true_path=None if true_poses is None else true_poses[: step + 1],
-        est_path=est_path,
-    )
-
-
-def replay(
-    data: CourseData,
-    *,
-    world: World | None = None,
-    steps: int | None = None,
-    update: str = "batch",
-    init_mode: str = "course",
-    true_poses: np.ndarray | None = None,
-    frame_every: int = 0,
-) -> ReplayResult:
-    """Run the course's EKF-SLAM over the first ``steps`` steps of ``data`` (all by default).
-
-    Each step is one prediction with its odometry, then one correction with its readings. ``frame_every`` > 0
-    keeps a picture frame every that many steps (and at the last one) for an animation.
-    """
-    steps = len(data) if steps is None else steps
-    if not 0 < steps <= len(data):
-        raise ValueError(f"steps must be in [1, {len(data)}], got {steps}")
-    labels = landmark_labels(data, world)
-    slot_of = np.full(int(max(labels.max(initial=0), data.max_id)) + 1, -1, dtype=np.int64)
-    slot_of[labels] = np.arange(len(labels))
-
-    ekf = EKFSLAM(
-        len(labels),
-        motion_model="odometry",
-        motion_noise=np.diag([0.1, 0.1, 0.01]),
-        measurement_noise=0.01 * np.eye(2),
-        landmark_prior=1000.0,
-        pose_prior=0.0,
-        init_mode=init_mode,
-        update=update,
-        initial_pose=np.zeros(3),
-    )
-    frames: list[Frame] = []
-    path = np.zeros((steps + 1, 3))
-    for t, block in enumerate(data.steps[:steps], start=1):
-        ekf.predict(block.odometry)
-        if len(block.ids):
-            ekf.correct(slot_of[block.ids], block.z)
-        path[t] = ekf.pose
-        if frame_every > 0 and (t % frame_every == 0 or t == steps):
-            frames.append(_frame(ekf, labels, t, block.z, true_poses, path[: t + 1].copy()))
-    return ReplayResult(ekf, steps, labels, world, true_poses, frames, data.steps[steps - 1].z, path)
-
-
-def summary(result: ReplayResult) -> dict[str, object]:
-    """The ``--json`` object: steps, pose, pose_cov, observed landmarks by file id, log_det (null if -inf)."""
-    log_det = float(result.ekf.log_det)
-    return {
-        "steps": result.steps,
-        "pose": [float(v) for v in result.ekf.pose],
-        "pose_cov": [[float(v) for v in row] for row in result.ekf.pose_cov],
-        "landmarks": {
-            str(i): [float(v) for v in xy] for i, xy in sorted(result.landmark_estimates().items())
-        },
-        "log_det": log_det if math.isfinite(log_det) else None,
-    }
 
 
 def _report(result: ReplayResult, source: str, n_readings: int) -> str:
@@ -181,7 +41,7 @@ def _report(result: ReplayResult, source: str, n_readings: int) -> str:
     ]
     if result.true_poses is not None:
         tx, ty, tt = result.true_poses[result.steps]
-        heading_error = (theta - tt + np.pi) % (2.0 * np.pi) - np.pi
+        heading_error = wrap_angle(theta - tt)
         lines.append(
             f"true pose        x = {tx:.6f} m, y = {ty:.6f} m, theta = {tt:.6f} rad "
             f"(error {math.hypot(x - tx, y - ty):.4f} m, {abs(heading_error):.4f} rad)"

@@ -23,7 +23,7 @@ import numpy as np
 __all__ = [
     "CourseData",
     "Step",
-    "World",
+    "LandmarkMap",
     "read_sensor_data",
     "read_world",
     "write_sensor_data",
@@ -87,8 +87,9 @@ class CourseData:
 
 
 @dataclass(frozen=True)
-class World:
-    """Ground-truth landmarks, in file order: used for plotting and evaluation, never given to the filter."""
+class LandmarkMap:
+    """The course's world file: ground-truth landmarks, in file order, used for plotting and evaluation and never
+    given to the filter (not the simulator's ``ekfslam_gym.sim.World``, which is a whole physical world)."""
 
     ids: np.ndarray  # (n,) int, distinct
     positions: np.ndarray  # (n, 2) float [m]
@@ -110,10 +111,10 @@ class World:
         """``{id: (x, y)}``."""
         return {int(i): p for i, p in zip(self.ids, self.positions, strict=True)}
 
-    def sorted(self) -> World:
+    def sorted(self) -> LandmarkMap:
         """The same landmarks ordered by id: the order of the filter's landmark slots."""
         order = np.argsort(self.ids, kind="stable")
-        return World(self.ids[order], self.positions[order])
+        return LandmarkMap(self.ids[order], self.positions[order])
 
 
 # --------------------------------------------------------------------------------------------------- parsing
@@ -187,7 +188,7 @@ def read_sensor_data(path: PathLike) -> CourseData:
     return CourseData(steps)
 
 
-def read_world(path: PathLike) -> World:
+def read_world(path: PathLike) -> LandmarkMap:
     """Read a ``world.dat`` file: one ``id x y`` line per landmark, ids distinct and 1-based."""
     path = Path(path)
     ids: list[int] = []
@@ -207,7 +208,7 @@ def read_world(path: PathLike) -> World:
         first_line[landmark] = number
         ids.append(landmark)
         positions.append([_float(tokens[1], "x", where), _float(tokens[2], "y", where)])
-    return World(np.array(ids, dtype=np.int64), np.array(positions, dtype=float).reshape(-1, 2))
+    return LandmarkMap(np.array(ids, dtype=np.int64), np.array(positions, dtype=float).reshape(-1, 2))
 
 
 # --------------------------------------------------------------------------------------------------- writing
@@ -233,7 +234,7 @@ def write_sensor_data(path: PathLike, data: CourseData) -> Path:
     return path
 
 
-def write_world(path: PathLike, world: World) -> Path:
+def write_world(path: PathLike, world: LandmarkMap) -> Path:
     """Write ``world`` in the ``world.dat`` format (file order kept); reading it back is exact."""
     path = Path(path)
     with path.open("w", encoding="ascii", newline="\n") as handle:

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ekfslam_gym.data.course import CourseData, PathLike, Step, World, write_sensor_data, write_world
+from ekfslam_gym.data.course import CourseData, LandmarkMap, PathLike, Step, write_sensor_data, write_world
 
 __all__ = ["Drive", "loop_poses", "simulate_drive"]
 
@@ -33,7 +33,7 @@ class Drive:
 
     data: CourseData  # odometry and readings, one step per motion
     poses: np.ndarray  # (T+1, 3) true poses; poses[k+1] is where the readings of step k were taken
-    world: World  # true landmarks, ids 1..n
+    world: LandmarkMap  # true landmarks, ids 1..n
     seed: int | None = None
 
     def write(self, directory: PathLike) -> tuple[Path, Path]:
@@ -219,7 +219,7 @@ def simulate_drive(
         z = z + rng.normal(0.0, 1.0, z.shape) * np.asarray(measurement_std, float)
         steps.append(Step(odometry[k], ids[seen], z))
 
-    return Drive(CourseData(steps), poses, World(ids, landmarks), seed)
+    return Drive(CourseData(steps), poses, LandmarkMap(ids, landmarks), seed)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

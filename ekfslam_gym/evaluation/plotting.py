@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from ekfslam_gym.data.course import World
+    from ekfslam_gym.data.course import LandmarkMap
 
 __all__ = ["Belief", "Frame", "belief_figure", "draw_frame", "plot_limits", "save_gif", "save_png"]
 
@@ -93,7 +93,7 @@ def _ellipse(ax: Axes, centre: np.ndarray, cov: np.ndarray, color: str, **kwargs
 
 
 def plot_limits(
-    frames: Sequence[Frame], world: World | None = None, margin: float = 1.5
+    frames: Sequence[Frame], world: LandmarkMap | None = None, margin: float = 1.5
 ) -> tuple[float, ...]:
     """Square (xmin, xmax, ymin, ymax) covering the frames' content, fixed so an animation does not jump."""
     points = [np.zeros((0, 2))]
@@ -120,7 +120,7 @@ def plot_limits(
 
 
 def draw_frame(
-    ax: Axes, frame: Frame, world: World | None = None, limits: Sequence[float] | None = None
+    ax: Axes, frame: Frame, world: LandmarkMap | None = None, limits: Sequence[float] | None = None
 ) -> None:
     """Draw one frame onto ``ax``."""
     belief = frame.belief
@@ -184,7 +184,7 @@ def draw_frame(
 
 
 def belief_figure(
-    frame: Frame, world: World | None = None, limits: Sequence[float] | None = None, dpi: float = 100.0
+    frame: Frame, world: LandmarkMap | None = None, limits: Sequence[float] | None = None, dpi: float = 100.0
 ) -> Figure:
     """A new 6 x 6.6 inch figure (Agg canvas, not registered with pyplot) showing one frame."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -198,7 +198,7 @@ def belief_figure(
     return figure
 
 
-def save_png(path: str | os.PathLike[str], frame: Frame, world: World | None = None) -> Path:
+def save_png(path: str | os.PathLike[str], frame: Frame, world: LandmarkMap | None = None) -> Path:
     """Draw one frame to a PNG file."""
     path = Path(path)
     belief_figure(frame, world).savefig(path, format="png")
@@ -208,7 +208,7 @@ def save_png(path: str | os.PathLike[str], frame: Frame, world: World | None = N
 def save_gif(
     path: str | os.PathLike[str],
     frames: Sequence[Frame],
-    world: World | None = None,
+    world: LandmarkMap | None = None,
     fps: float = 10.0,
     dpi: float = 72.0,
 ) -> Path:
