@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from ekfslam_gym.cli.graph import main as graph_cli
-from ekfslam_gym.cli.graph import read_graph
 from ekfslam_gym.data.g2o import read_g2o, write_g2o
+from ekfslam_gym.data.graph_files import read_graph
 from ekfslam_gym.data.matfile import read_mat_graph
 from ekfslam_gym.graph.optimizer import FactorGraph, Values, gauss_newton, levenberg_marquardt
 from tests.datapaths import freiburg_dir

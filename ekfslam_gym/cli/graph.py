@@ -11,56 +11,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..graph.optimizer import GraphProblem, OptimizationResult, Values, optimize
+from ..data.graph_files import read_graph
+from ..evaluation.plotting import plot_graph_solution
+from ..graph.optimizer import optimize
 from ..graph.sparse_solve import BACKENDS
-
-__all__ = ["main", "plot_solution", "read_graph"]
-
-
-def read_graph(path: str | os.PathLike[str]) -> GraphProblem:
-    """Read a graph file, choosing the format by extension (``.dat`` MAT or ``.g2o`` text)."""
-    suffix = Path(path).suffix.lower()
-    if suffix == ".dat":
-        from ..data.matfile import read_mat_graph
-
-        return read_mat_graph(path)
-    if suffix == ".g2o":
-        from ..data.g2o import read_g2o
-
-        return read_g2o(path)
-    raise ValueError(f"{path}: unknown graph format {suffix!r} (expected .dat or .g2o)")
-
-
-def plot_solution(
-    path: str | os.PathLike[str], initial: Values, result: OptimizationResult, title: str = ""
-) -> None:
-    """Save a PNG of the initial guess and the optimised poses and landmarks (matplotlib, Agg canvas)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(7, 7), dpi=120)
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    ax.plot(initial.poses[:, 0], initial.poses[:, 1], color="0.7", lw=0.8, label="initial poses")
-    poses, landmarks = result.values.poses, result.values.landmarks
-    ax.plot(poses[:, 0], poses[:, 1], color="tab:blue", lw=0.9, label="optimised poses")
-    if len(landmarks):
-        ax.scatter(
-            landmarks[:, 0], landmarks[:, 1], s=6, color="tab:red", label="optimised landmarks", zorder=3
-        )
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_title(
-        f"{title}  F: {result.initial_error:.6g} → {result.final_error:.6g} ({result.iterations} it.)"
-    )
-    ax.legend(loc="best", fontsize="small")
-    fig.savefig(path)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -103,7 +61,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         status = "converged" if result.converged else "stopped without converging"
         print(f"{status} after {result.iterations} iterations in {result.seconds:.3f} s")
     if args.plot is not None:
-        plot_solution(args.plot, problem.initial, result, title=args.file.name)
+        plot_graph_solution(args.plot, problem.initial, result, title=args.file.name)
     return 0
 
 

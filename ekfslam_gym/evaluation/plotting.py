@@ -1,4 +1,5 @@
-"""Pictures of an EKF-SLAM belief, in the style of the course's figure (sheet 4, seed 002).
+"""Pictures of an EKF-SLAM belief in the style of the Freiburg *Robot Mapping* course's EKF-SLAM figure, and of a
+solved pose graph.
 
 True landmarks as black crosses, estimated landmarks with their 3-sigma ellipses in blue, the robot estimate
 with its 3-sigma position ellipse and heading in red, the true pose and trajectory in green when known, and
@@ -20,15 +21,26 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..ellipses import ellipse_points
+
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
     from ekfslam_gym.data.course import LandmarkMap
+    from ekfslam_gym.graph.optimizer import OptimizationResult, Values
 
-__all__ = ["Belief", "Frame", "belief_figure", "draw_frame", "plot_limits", "save_gif", "save_png"]
+__all__ = [
+    "Belief",
+    "Frame",
+    "belief_figure",
+    "draw_frame",
+    "plot_graph_solution",
+    "plot_limits",
+    "save_gif",
+    "save_png",
+]
 
-SIGMAS = 3.0  # ellipses are drawn at 3 sigma, as in the course figure
 HEADING_LENGTH = 0.6  # [m] length of the heading tick
 
 
@@ -83,13 +95,11 @@ class Frame:
 
 
 def _ellipse(ax: Axes, centre: np.ndarray, cov: np.ndarray, color: str, **kwargs: object) -> None:
-    from matplotlib.patches import Ellipse
+    from matplotlib.patches import Polygon
 
-    values, vectors = np.linalg.eigh(0.5 * (cov + cov.T))
-    values = np.clip(values, 0.0, None)
-    angle = np.degrees(np.arctan2(vectors[1, 1], vectors[0, 1]))
-    width, height = 2.0 * SIGMAS * np.sqrt(values[::-1])
-    ax.add_patch(Ellipse(tuple(centre), width, height, angle=angle, fill=False, color=color, **kwargs))
+    points, valid = ellipse_points(centre, cov, n=64)
+    if valid[0]:
+        ax.add_patch(Polygon(points[0], closed=True, fill=False, color=color, **kwargs))
 
 
 def plot_limits(
@@ -226,3 +236,30 @@ def save_gif(
     path = Path(path)
     iio.imwrite(path, np.stack(images), extension=".gif", duration=1000.0 / fps, loop=0)
     return path
+
+
+def plot_graph_solution(
+    path: str | os.PathLike[str], initial: Values, result: OptimizationResult, title: str = ""
+) -> None:
+    """Save a PNG of the initial guess and the optimised poses and landmarks (matplotlib, Agg canvas)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7, 7), dpi=120)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.plot(initial.poses[:, 0], initial.poses[:, 1], color="0.7", lw=0.8, label="initial poses")
+    poses, landmarks = result.values.poses, result.values.landmarks
+    ax.plot(poses[:, 0], poses[:, 1], color="tab:blue", lw=0.9, label="optimised poses")
+    if len(landmarks):
+        ax.scatter(
+            landmarks[:, 0], landmarks[:, 1], s=6, color="tab:red", label="optimised landmarks", zorder=3
+        )
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(
+        f"{title}  F: {result.initial_error:.6g} → {result.final_error:.6g} ({result.iterations} it.)"
+    )
+    ax.legend(loc="best", fontsize="small")
+    fig.savefig(path)
