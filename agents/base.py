@@ -64,8 +64,3 @@ def wall_scan(env: Any, observation: Any) -> np.ndarray:
 def beam_angles(n_beams: int) -> np.ndarray:
     """Beam directions (rad) relative to the heading, as the sensor lays them out."""
     return np.arange(n_beams) * (2.0 * math.pi / n_beams)
-
-
-def wrap(angle: float) -> float:
-    """Angle wrapped to [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi

@@ -8,7 +8,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from .base import Agent, beam_angles, clip_action, wall_scan, wrap
+from ekfslam_gym.angles import wrap_angle
+
+from .base import Agent, beam_angles, clip_action, wall_scan
 
 
 class RandomAgent(Agent):
@@ -164,8 +166,8 @@ class LawnmowerAgent(Agent):
             self._steps_on_waypoint = 0
         self._steps_on_waypoint += 1
 
-        error = wrap(math.atan2(offset[1], offset[0]) - pose[2])
-        bearings = np.array([wrap(a) for a in self._angles])
+        error = wrap_angle(math.atan2(offset[1], offset[0]) - pose[2])
+        bearings = np.array([wrap_angle(a) for a in self._angles])
         ahead = np.abs(bearings) <= math.radians(30.0)
         if scan[ahead].min() < self.avoid_distance:
             # Blocked: turn in place towards the half with more room (its summed clearances), then drive

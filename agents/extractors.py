@@ -27,7 +27,9 @@ def is_belief_image(space: gym.Space) -> bool:
 class BeliefCNN(BaseFeaturesExtractor):
     """Convolves every (C, H, W) Box of a Dict space, flattens the others, and concatenates the features."""
 
-    def __init__(self, observation_space: gym.spaces.Dict, cnn_features: int = 128, channels: int = 32) -> None:
+    def __init__(
+        self, observation_space: gym.spaces.Dict, cnn_features: int = 128, channels: int = 32
+    ) -> None:
         if not isinstance(observation_space, gym.spaces.Dict):
             raise TypeError(f"BeliefCNN needs a Dict observation space, got {observation_space}")
         super().__init__(observation_space, features_dim=1)
@@ -52,7 +54,9 @@ class BeliefCNN(BaseFeaturesExtractor):
                 extractors[key] = nn.Flatten()
                 total += get_flattened_obs_dim(space)
         if not any(is_belief_image(space) for space in observation_space.spaces.values()):
-            raise ValueError("BeliefCNN found no (C, H, W) image in the observation; set observation.belief_image")
+            raise ValueError(
+                "BeliefCNN found no (C, H, W) image in the observation; set observation.belief_image"
+            )
         self.extractors = nn.ModuleDict(extractors)
         self._features_dim = total
 

@@ -19,7 +19,8 @@ from agents import (
     make_agent,
     wall_scan,
 )
-from agents.greedy import _distance_field, _update_walls, expected_readings, rollout_gain
+from agents.greedy import expected_readings, rollout_gain
+from agents.greedy.grid import distance_field, update_walls
 from agents.ppo import model_paths
 from ekfslam_gym.filter.models import range_bearing
 
@@ -198,7 +199,7 @@ def test_frontier_distances_go_around_walls():
     wall[0:4, 2] = True  # a wall across the grid with an opening in the top row
     start = np.full((5, 5), np.inf)
     start[0, 0] = 0.0
-    d = _distance_field(start, wall, 1.0, 64)
+    d = distance_field(start, wall, 1.0, 64)
     assert d[0, 1] == pytest.approx(1.0) and d[1, 1] == pytest.approx(math.sqrt(2))
     # (0,0) -> (4,1): one diagonal and three steps; along row 4 past the wall's end: two steps (no corner
     # cutting); (4,3) -> (0,4): one diagonal and three steps.
@@ -211,10 +212,10 @@ def test_wall_memory_marks_scan_ends_and_reopens_what_a_beam_crosses():
     angles = np.arange(16) * (2 * math.pi / 16)
     scan = np.full(16, 5.0)
     scan[0] = 2.0  # a surface 2 m ahead of a robot at (5, 5) facing +x
-    _update_walls(wall, 0.0, 0.0, 0.5, 5.0, 5.0, 0.0, angles, scan, 5.0 - 1e-6, 1.5)
+    update_walls(wall, 0.0, 0.0, 0.5, 5.0, 5.0, 0.0, angles, scan, 5.0 - 1e-6, 1.5)
     assert wall[10, 14] and wall.sum() == 1
     scan[0] = 5.0  # later the same beam passes: the cell is free after all (an opened doorway)
-    _update_walls(wall, 0.0, 0.0, 0.5, 5.0, 5.0, 0.0, angles, scan, 5.0 - 1e-6, 1.5)
+    update_walls(wall, 0.0, 0.0, 0.5, 5.0, 5.0, 0.0, angles, scan, 5.0 - 1e-6, 1.5)
     assert not wall.any()
 
 

@@ -138,7 +138,7 @@ def measure_velocity(
 
 def __getattr__(name: str):
     # The compiled helpers, loaded with numba on first use so that importing this module never loads it.
-    if name in ("decompose_odometry", "odometry_std", "velocity_from_motion"):
+    if name in ("decompose_odometry", "odometry_std", "velocity_from_motion", "velocity_std"):
         from . import odometry_kernels
 
         return getattr(odometry_kernels, name)

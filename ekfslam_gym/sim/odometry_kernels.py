@@ -105,6 +105,15 @@ def velocity_from_motion(
 
 
 @njit(cache=True)
+def velocity_std(v: float, omega: float, alphas: np.ndarray) -> tuple[float, float]:
+    """Standard deviations (m/s, rad/s) of the noise on (v, omega); ``alphas`` is ``VelocityNoise.vector``
+    (alpha1..alpha4, v_floor, omega_floor), the velocity form of the alpha model (Thrun et al., table 5.3)."""
+    a_v = abs(v)
+    a_w = abs(omega)
+    return alphas[0] * a_v + alphas[1] * a_w + alphas[4], alphas[2] * a_v + alphas[3] * a_w + alphas[5]
+
+
+@njit(cache=True)
 def velocity_reading(
     x0: float,
     y0: float,
@@ -119,9 +128,7 @@ def velocity_reading(
     """(u, N, u_true) for the velocity form: the arc's (v, omega) plus std * normals, N = diag(std^2)."""
     u_true = np.empty(2)
     u_true[0], u_true[1] = velocity_from_motion(x0, y0, theta0, x1, y1, theta1, dt)
-    a_v = abs(u_true[0])
-    a_w = abs(u_true[1])
-    std = (alphas[0] * a_v + alphas[1] * a_w + alphas[4], alphas[2] * a_v + alphas[3] * a_w + alphas[5])
+    std = velocity_std(u_true[0], u_true[1], alphas)
     u = np.empty(2)
     cov = np.zeros((2, 2))
     for i in range(2):

@@ -1,0 +1,48 @@
+"""The greedy planner's wall veto: the wall scan as points and joined segments in the robot frame, and the
+clearance of a primitive's path from them (the planner never uses the walls' true geometry)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+WALL_JOIN = 1.5  # m: neighbouring scan end points closer than this are taken to lie on one surface
+
+
+def scan_geometry(scan: np.ndarray, angles: np.ndarray, scan_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """Wall points (m, 2) and segments (s, 4) in the robot frame from the scan (m per beam at ``angles``)."""
+    hit = scan < scan_max - 1e-6
+    points = np.column_stack([scan * np.cos(angles), scan * np.sin(angles)])
+    nxt = np.roll(np.arange(scan.size), -1)
+    join = hit & hit[nxt] & (np.hypot(*(points[nxt] - points).T) < WALL_JOIN)
+    segments = np.concatenate([points[join], points[nxt][join]], axis=1)
+    return points[hit], segments
+
+
+def clearances(rel: np.ndarray, points: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """Distance (m) from each relative position (K, 3) to the nearest scanned wall point or segment."""
+    d = np.full(rel.shape[0], np.inf)
+    if points.size:
+        d = np.min(
+            np.hypot(rel[:, None, 0] - points[None, :, 0], rel[:, None, 1] - points[None, :, 1]), axis=1
+        )
+    if segments.size:
+        a, b = segments[:, :2], segments[:, 2:]
+        ab = b - a
+        t = np.einsum("ksd,sd->ks", rel[:, None, :2] - a[None], ab) / np.maximum(
+            np.sum(ab * ab, axis=1), 1e-12
+        )
+        closest = a[None] + np.clip(t, 0.0, 1.0)[..., None] * ab[None]
+        d = np.minimum(d, np.min(np.linalg.norm(rel[:, None, :2] - closest, axis=2), axis=1))
+    return d
+
+
+def to_world(rel: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """Poses (K, 3) relative to ``pose`` in the world frame."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    out = np.empty_like(rel)
+    out[:, 0] = pose[0] + c * rel[:, 0] - s * rel[:, 1]
+    out[:, 1] = pose[1] + s * rel[:, 0] + c * rel[:, 1]
+    out[:, 2] = pose[2] + rel[:, 2]
+    return out
