@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from ekfslam_gym.data.course import read_sensor_data, read_world
-from ekfslam_gym.data.drive import loop_poses, main, simulate_drive
+from ekfslam_gym.data.drive import main
+from ekfslam_gym.data.synthetic import loop_poses, simulate_drive
 
 
 def _wrap(a):

@@ -120,7 +120,6 @@ def test_episode_metrics_are_consistent_with_the_env():
 def test_smoother_option_reports_the_smoothed_episode_beside_the_filter(capsys):
     import json
 
-
     assert main(["--agent", "circle", "--seeds", "10000", "--smoother", "--json", "--no-progress"]) == 0
     out = json.loads(capsys.readouterr().out)
     metrics = out["metrics"]

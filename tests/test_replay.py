@@ -9,7 +9,7 @@ import pytest
 
 from ekfslam_gym.cli.replay import main
 from ekfslam_gym.data.course import read_sensor_data, read_world
-from ekfslam_gym.data.drive import simulate_drive
+from ekfslam_gym.data.synthetic import simulate_drive
 from ekfslam_gym.evaluation.replay import replay
 from tests.datapaths import freiburg_dir
 

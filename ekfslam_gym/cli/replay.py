@@ -23,7 +23,7 @@ import numpy as np
 
 from ..angles import wrap_angle
 from ..data.course import read_sensor_data, read_world
-from ..data.drive import simulate_drive
+from ..data.synthetic import simulate_drive
 from ..evaluation.replay import ReplayResult, replay, summary
 from ..filter import FilterDivergedError
 

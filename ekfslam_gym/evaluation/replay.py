@@ -52,7 +52,9 @@ class ReplayResult:
 
     def frame(self) -> Frame:
         """The final belief as a picture frame."""
-        return belief_frame(self.ekf, self.labels, self.steps, self.last_readings, self.true_poses, self.est_path)
+        return belief_frame(
+            self.ekf, self.labels, self.steps, self.last_readings, self.true_poses, self.est_path
+        )
 
 
 def landmark_labels(data: CourseData, world: LandmarkMap | None) -> np.ndarray:
