@@ -3,7 +3,7 @@
     OPENBLAS_NUM_THREADS=1 python bench/ekf.py [--sizes 10 50 100 200 400 500] [--budget 0.5]
 
 Every figure is a ratio of two timings taken in this one run (best of several repeats), 4 readings per step,
-batch update. The full-matrix form builds dense G, F_x,j and H and applies (I - K H) Sigma, as seed 000 writes it.
+batch update. The full-matrix form builds dense G, F_x,j and H and applies (I - K H) Sigma, as the course's lecture notes write it.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The course's graph data sets (sheet 10) through the MAT and g2o readers, and the g2o writer.
+"""The course's graph data sets (its least-squares SLAM exercise) through the MAT and g2o readers, and the g2o writer.
 
 The data stays in ../shared/data/freiburg (or $EKFSLAM_DATA_DIR); these tests skip where it is absent.
 """

@@ -1,4 +1,4 @@
-"""Readers and writers for the Freiburg "Robot Mapping" EKF-SLAM text formats (sheet 4).
+"""Readers and writers for the Freiburg "Robot Mapping" EKF-SLAM text formats (its EKF-SLAM exercise).
 
 ``sensor_data.dat`` is a sequence of blocks: one ``ODOMETRY r1 t r2`` line (odometry motion model: rad, m,
 rad) followed by zero or more ``SENSOR id range bearing`` lines (1-based landmark id, m, rad in the robot

@@ -57,8 +57,8 @@ class EKFSLAM:
 
     Args:
         n_landmarks: number of landmark slots (fixed; readings name them by 0-based index).
-        motion_model: ``"odometry"`` (control (rot1, trans, rot2), seed 002) or ``"velocity"`` (control
-            (v, omega) applied for ``dt`` seconds, seed 000).
+        motion_model: ``"odometry"`` (control (rot1, trans, rot2), Thrun et al. table 5.6) or ``"velocity"`` (control
+            (v, omega) applied for ``dt`` seconds, Thrun et al. table 5.3).
         dt: control period in seconds for the velocity model.
         motion_noise: R, the pose-space noise added at every prediction (3x3, a (3,) diagonal or a scalar);
             default the course's diag(0.1, 0.1, 0.01). ``predict`` can override it per step, in pose space or

@@ -29,7 +29,7 @@ def _sinc_and_derivative(u: float) -> tuple[float, float]:
 
 @njit(cache=True)
 def velocity_motion(pose: np.ndarray, v: float, omega: float, dt: float):
-    """Velocity motion model (seed 000, y row corrected) for a constant (v, omega) over dt seconds.
+    """Velocity motion model (Thrun, Burgard & Fox, table 5.3; the course's y row corrected) for a constant (v, omega) over dt seconds.
 
     Written in the chord form x' = x + v dt sinc(a/2) cos(theta + a/2), a = omega dt, which equals the
     textbook x - v/w sin(theta) + v/w sin(theta + w dt) (and its y row +v/w cos(theta) - v/w cos(theta + w dt))
@@ -65,7 +65,7 @@ def velocity_motion(pose: np.ndarray, v: float, omega: float, dt: float):
 
 @njit(cache=True)
 def odometry_motion(pose: np.ndarray, rot1: float, trans: float, rot2: float):
-    """Odometry motion model (seed 002): turn rot1, drive trans metres, turn rot2.
+    """Odometry motion model (Thrun, Burgard & Fox, table 5.6): turn rot1, drive trans metres, turn rot2.
 
     Returns the new pose (3,), G = d pose'/d pose (3, 3) and V = d pose'/d (rot1, trans, rot2) (3, 3).
     """
