@@ -13,8 +13,6 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from ekfslam_gym.envs.observation import observation_layout
-
 
 class Agent:
     """Base class: ``reset(env, seed)`` once per episode, then ``act(observation) -> action``.
@@ -50,15 +48,11 @@ def clip_action(v: float, omega: float) -> np.ndarray:
 def wall_scan(env: Any, observation: Any) -> np.ndarray:
     """The observation's wall scan in metres (n_beams,), beam i at heading + 2 pi i / n_beams.
 
-    A beam at ``sensor.scan_max_range`` saw no wall. Works for the flat and the Dict observation.
+    A beam at ``sensor.scan_max_range`` saw no wall. Works for the flat and the Dict observation: the env's
+    ``observation_layout`` says where the scan lies.
     """
-    cfg = env.config
-    if isinstance(observation, dict):
-        normalised = np.asarray(observation["scan"], dtype=float)
-    else:
-        layout = observation_layout(cfg.observation.k_nearest, cfg.sensor.n_beams, cfg.observation.grid)
-        normalised = np.asarray(observation, dtype=float)[layout["scan"]]
-    return normalised * cfg.sensor.scan_max_range
+    normalised = np.asarray(env.observation_layout.part(observation, "scan"), dtype=float)
+    return normalised * env.config.sensor.scan_max_range
 
 
 def beam_angles(n_beams: int) -> np.ndarray:

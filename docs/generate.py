@@ -15,7 +15,10 @@ PAGE = Path(__file__).resolve().parent / "environment.md"
 
 
 def render() -> str:
-    from ekfslam_gym.envs import PRESETS, EKFSLAMEnv, EnvConfig, observation
+    import gymnasium as gym
+
+    import ekfslam_gym  # noqa: F401  (registers the ids)
+    from ekfslam_gym.envs import PRESETS, REWARD_TERMS, EKFSLAMEnv, EnvConfig, observation
 
     doc = inspect.cleandoc(EKFSLAMEnv.__doc__ or "")
     summary, _, body = doc.partition("\n")
@@ -31,6 +34,14 @@ def render() -> str:
         "",
         inspect.cleandoc(observation.__doc__ or ""),
         "",
+        "## Reward terms",
+        "",
+        "`ekfslam_gym.envs.rewards.REWARD_TERMS`, the list that makes the `reward` config section:",
+        "",
+        "| term | default weight | the weight multiplies |",
+        "|---|---|---|",
+        *(f"| `{term.name}` | {term.default} | {term.meaning} |" for term in REWARD_TERMS),
+        "",
         "## Default configuration",
         "",
         "Every field, as `EnvConfig().to_dict()` gives it (the same as `configs/env/default.yaml`):",
@@ -39,9 +50,11 @@ def render() -> str:
     ]
     for section, value in EnvConfig().to_dict().items():
         lines.append(f"{section} = {value!r}")
-    lines += ["```", "", "## Registered ids and their overrides", ""]
+    lines += ["```", "", "## Registered ids, their step limits and their overrides", ""]
     for env_id, overrides in PRESETS.items():
-        lines.append(f"- `{env_id}`: `{overrides!r}`")
+        lines.append(
+            f"- `{env_id}` (max_episode_steps {gym.spec(env_id).max_episode_steps}): `{overrides!r}`"
+        )
     return "\n".join(lines) + "\n"
 
 

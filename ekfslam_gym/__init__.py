@@ -5,20 +5,32 @@ Importing the package registers ``EKFSLAM-v0``, ``EKFSLAM-Loop-v0`` and ``EKFSLA
 work.
 """
 
-from gymnasium.envs.registration import register, registry
+from gymnasium.envs.registration import WrapperSpec, register, registry
 
 __version__ = "0.1.0"
 
 
 def _register() -> None:
+    from .envs.config import EnvConfig
     from .envs.presets import PRESETS
 
     for env_id, overrides in PRESETS.items():
         if env_id not in registry:
-            # No max_episode_steps here: the env truncates itself at its config's max_episode_steps, so a
-            # config that changes the limit is obeyed (a TimeLimit from the registry would not know it).
+            # The spec carries the preset's step limit (gym.make's TimeLimit), and HorizonSync, right above
+            # that TimeLimit, makes the env's own limit (truncation, time left) the same number whichever of
+            # gym.make(max_episode_steps=N) or the config gives it (see ekfslam_gym.envs.horizon).
+            limit = EnvConfig.from_overrides(**overrides).max_episode_steps
+            sync = WrapperSpec(
+                name="HorizonSync",
+                entry_point="ekfslam_gym.envs.horizon:HorizonSync",
+                kwargs={"registered_limit": limit},
+            )
             register(
-                id=env_id, entry_point="ekfslam_gym.envs.ekfslam_env:EKFSLAMEnv", kwargs={"config": overrides}
+                id=env_id,
+                entry_point="ekfslam_gym.envs.ekfslam_env:EKFSLAMEnv",
+                max_episode_steps=limit,
+                additional_wrappers=(sync,),
+                kwargs={"config": overrides},
             )
 
 

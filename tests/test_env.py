@@ -122,10 +122,13 @@ def test_bad_actions_raise_and_change_nothing(bad):
     env = EKFSLAMEnv()
     env.reset(seed=0)
     env.step(np.array([0.5, 0.2]))
-    before = pickle.dumps((env.filter.mean.copy(), env.filter.cov.copy(), env.world.pose, env._t))
+    before = pickle.dumps((env.filter.mean.copy(), env.filter.cov.copy(), env.world.pose, env.elapsed_steps))
     with pytest.raises(ValueError):
         env.step(bad)
-    assert pickle.dumps((env.filter.mean.copy(), env.filter.cov.copy(), env.world.pose, env._t)) == before
+    assert (
+        pickle.dumps((env.filter.mean.copy(), env.filter.cov.copy(), env.world.pose, env.elapsed_steps))
+        == before
+    )
 
 
 def test_out_of_range_actions_are_clipped():
@@ -213,7 +216,8 @@ def test_vector_envs_autoreset_reinitialises_the_belief():
     _, _, _, _, info = envs.step(np.zeros((2, 2), dtype=np.float32))  # the autoreset step
     for i, sub in enumerate(envs.envs):
         ekf = sub.unwrapped.filter
-        assert sub.unwrapped._t == 0 and info["step"][i] == 0
+        assert sub.unwrapped.elapsed_steps == 0 and info["step"][i] == 0
+        assert sub.unwrapped.config.max_episode_steps == 5 and sub.spec.max_episode_steps == 5
         assert info["log_det"][i] == pytest.approx(np.linalg.slogdet(ekf.cov)[1], abs=1e-9)
         assert info["log_det"][i] > info0["log_det"][i] - 50  # a fresh belief, not the 5-step-old one
         assert ekf.observed.sum() == info["landmarks_seen"][i]
@@ -352,39 +356,36 @@ def test_discovery_reward_matches_the_documented_formula():
 
 
 def test_coverage_window_is_robot_centred_and_turns_with_the_heading():
-    from ekfslam_gym.envs.observation import make_memory, mark_coverage, observation_layout
+    from ekfslam_gym.envs.observation import make_memory, mark_coverage
 
     env = EKFSLAMEnv(world={"layout_kwargs": {"width": 40.0, "height": 40.0}})
     obs, _ = env.reset(seed=0)
     grid = env.config.observation.grid
-    window = obs[observation_layout(8, 16, grid)["coverage"]].reshape(grid, grid)
+    window = env.observation_layout.part(obs, "coverage").reshape(grid, grid)
     pose = env.filter.pose
+    bounds, memory_now = env.bounds, env.coverage_memory
     # Rebuild the memory from the one pose the sensor has looked from, and read the window by hand.
-    memory = make_memory(env._bounds, 0.5)
-    mark_coverage(
-        memory, np.array(pose), env._bounds, 0.5, env.config.sensor.max_range, env.config.sensor.fov
-    )
-    assert np.array_equal(memory, env._memory)
+    memory = make_memory(bounds, 0.5)
+    mark_coverage(memory, np.array(pose), bounds, 0.5, env.config.sensor.max_range, env.config.sensor.fov)
+    assert np.array_equal(memory, memory_now)
     centre = grid // 2
     assert window[centre, centre + 2] == 1.0  # 4 m straight ahead: inside the 6 m, 180 degree footprint
     ahead_left = pose[:2] + 4.0 * np.array([np.cos(pose[2] + 0.5), np.sin(pose[2] + 0.5)])
-    assert env._memory[
-        int((ahead_left[1] - env._bounds[1]) / 0.5), int((ahead_left[0] - env._bounds[0]) / 0.5)
-    ]
+    assert memory_now[int((ahead_left[1] - bounds[1]) / 0.5), int((ahead_left[0] - bounds[0]) / 0.5)]
     behind = pose[:2] - 4.0 * np.array([np.cos(pose[2]), np.sin(pose[2])])
-    inside = env._bounds[0] < behind[0] < env._bounds[2] and env._bounds[1] < behind[1] < env._bounds[3]
+    inside = bounds[0] < behind[0] < bounds[2] and bounds[1] < behind[1] < bounds[3]
     assert window[centre, centre - 2] == (0.0 if inside else 1.0)  # behind: not looked at (or outside)
 
 
 def test_coverage_shaping_pays_for_newly_looked_at_area_only():
     env = EKFSLAMEnv(reward={"coverage": 2.0})
     env.reset(seed=1)
-    area = env._memory.sum() * 0.25
+    area = env.coverage_memory.sum() * 0.25
     total = 0.0
     for _ in range(50):
         *_, info = env.step(np.array([1.0, 0.3]))
         total += info["reward_terms"]["coverage"]
-    assert total == pytest.approx(2.0 * (env._memory.sum() * 0.25 - area))
+    assert total == pytest.approx(2.0 * (env.coverage_memory.sum() * 0.25 - area))
     for _ in range(30):  # spinning on the spot looks at nothing new after the first turn
         *_, info = env.step(np.array([0.0, 1.0]))
     assert info["reward_terms"]["coverage"] == 0.0
@@ -403,3 +404,187 @@ def test_coarse_window_holds_the_fraction_looked_at_and_can_be_disabled():
     plain = EKFSLAMEnv(observation={"coarse_grid": 0})
     assert plain.observation_space.shape == (139,)
     np.testing.assert_array_equal(plain.reset(seed=2)[0], obs[:-25])
+
+
+# ---------------------------------------------------------------------------------------- observation layout
+@pytest.mark.parametrize(
+    "observation, n_beams",
+    [({}, 16), ({"k_nearest": 3, "grid": 5, "coarse_grid": 3}, 7), ({"kind": "dict", "coarse_grid": 0}, 16)],
+)
+def test_observation_layout_is_where_the_spaces_and_the_kernel_put_each_part(observation, n_beams):
+    from ekfslam_gym.envs.observation import (
+        LANDMARK_FEATURES,
+        PARTS,
+        ObservationLayout,
+        fill_observation,
+        observation_constants,
+    )
+
+    env = EKFSLAMEnv(observation=observation, sensor={"n_beams": n_beams})
+    cfg = env.config
+    layout = env.observation_layout
+    assert layout == ObservationLayout.from_config(cfg.observation, cfg.sensor)
+    # The slices tile the vector in PARTS order; the offsets say the same, absent parts being empty spans.
+    present = [name for name in PARTS if name in layout.slices]
+    assert list(layout.slices) == present == list(layout.sizes)
+    assert ("coverage_coarse" in present) == (cfg.observation.coarse_grid > 0)
+    stops = [0] + [layout.slices[name].stop for name in present]
+    assert [layout.slices[name].start for name in present] == stops[:-1] and stops[-1] == layout.size
+    for i, name in enumerate(PARTS):
+        span = layout.offsets[i + 1] - layout.offsets[i]
+        assert span == (layout.sizes[name] if name in present else 0)
+    assert layout.sizes["landmarks"] == LANDMARK_FEATURES * cfg.observation.k_nearest
+    assert layout.sizes["scan"] == n_beams and layout.sizes["coverage"] == cfg.observation.grid**2
+    # The spaces are the layout's.
+    space = env.observation_space
+    if cfg.observation.kind == "dict":
+        assert sorted(space.spaces) == sorted(present)  # gymnasium sorts a Dict's keys
+        assert all(space[name].shape == (layout.sizes[name],) for name in present)
+    else:
+        assert space.shape == (layout.size,)
+
+    obs, _ = env.reset(seed=6)
+    for _ in range(20):
+        obs, *_ = env.step(np.array([0.6, 0.4]))
+    flat = np.concatenate([obs[name] for name in present]) if isinstance(obs, dict) else obs
+    part = {name: layout.part(obs, name) for name in present}
+    np.testing.assert_array_equal(flat[layout.slices["scan"]], part["scan"])
+    # What the kernel wrote where the layout says: the scan, the pose, the time left, the landmark slots.
+    scan = np.minimum(env.world.scan() / cfg.sensor.scan_max_range, 1.0).astype(np.float32)
+    np.testing.assert_array_equal(part["scan"], scan)
+    pose = env.filter.pose
+    np.testing.assert_allclose(part["pose"][2:], [np.sin(pose[2]), np.cos(pose[2])], atol=1e-6)
+    np.testing.assert_allclose(part["pose_cov"], np.log(np.diag(env.filter.pose_cov)) / 10, atol=1e-5)
+    assert part["globals"][1] == pytest.approx(env.filter.observed.mean())
+    assert part["globals"][2] == pytest.approx(1.0 - 20 / cfg.max_episode_steps)
+    slots = part["landmarks"].reshape(-1, LANDMARK_FEATURES)
+    assert slots[:, 0].sum() == min(env.filter.observed.sum(), cfg.observation.k_nearest)
+    # Every entry is written: the kernel on a NaN-filled vector reproduces the observation exactly.
+    ekf = env.filter
+    out = np.full(layout.size, np.nan, dtype=np.float32)
+    fill_observation(
+        out, layout.offsets, observation_constants(cfg.observation, cfg.sensor), ekf.mean, ekf.cov,
+        ekf.observed, ekf.log_det, ekf.pose_cov_given_map, env.world.scan(), env.coverage_memory, env.bounds,
+        1.0 - 20 / cfg.max_episode_steps,
+    )  # fmt: skip
+    np.testing.assert_array_equal(out, flat)
+
+
+def test_agents_read_the_scan_through_the_env_layout():
+    from agents.base import wall_scan
+
+    for observation in ({"coarse_grid": 0, "k_nearest": 2}, {"kind": "dict"}):
+        env = EKFSLAMEnv(observation=observation, sensor={"n_beams": 9})
+        obs, _ = env.reset(seed=1)
+        truth = np.minimum(env.world.scan(), env.config.sensor.scan_max_range)
+        np.testing.assert_allclose(wall_scan(env, obs), truth, rtol=1e-6)
+
+
+def test_layout_rejects_bad_sizes():
+    from ekfslam_gym.envs.observation import ObservationLayout
+
+    with pytest.raises(ValueError, match="n_beams"):
+        ObservationLayout(8, 0, 9)
+    with pytest.raises(ValueError, match="kind"):
+        ObservationLayout(8, 16, 9).space("image")
+
+
+# ---------------------------------------------------------------------------------------- reward hooks, access
+def test_one_list_of_reward_terms_makes_the_config_fields_and_the_hooks():
+    import dataclasses
+
+    from ekfslam_gym.envs import RewardConfig
+    from ekfslam_gym.envs.rewards import REWARD_NAMES, REWARD_TERMS
+
+    assert tuple(f.name for f in dataclasses.fields(RewardConfig)) == REWARD_NAMES
+    assert all(getattr(RewardConfig(), t.name) == t.default for t in REWARD_TERMS)
+    assert all(callable(getattr(EKFSLAMEnv, f"_reward_{name}", None)) for name in REWARD_NAMES)
+    # Only the terms with a non-zero weight, in the list's order; the reward is their sum.
+    env = EKFSLAMEnv(reward={"info_gain": 0.0, "step_cost": 0.25, "e_opt": 0.5})
+    env.reset(seed=0)
+    _, reward, *_, info = env.step(np.array([0.3, 0.1]))
+    assert list(info["reward_terms"]) == ["e_opt", "collision", "step_cost"]
+    assert info["reward_terms"]["step_cost"] == -0.25
+    assert reward == sum(info["reward_terms"].values())
+    assert pickle.loads(pickle.dumps(RewardConfig(collision=3.0))) == RewardConfig(collision=3.0)
+
+
+def test_public_views_for_agents_are_read_only_and_need_a_reset():
+    env = EKFSLAMEnv()
+    with pytest.raises(gym.error.ResetNeeded):
+        env.bounds  # noqa: B018
+    env.reset(seed=0)
+    assert env.elapsed_steps == 0
+    env.step(np.zeros(2))
+    assert env.elapsed_steps == 1
+    np.testing.assert_array_equal(env.bounds, env.world.layout.bounds)
+    for view in (env.bounds, env.coverage_memory, env.true_landmarks):
+        with pytest.raises(ValueError):
+            view[0] = 1.0
+
+
+# ---------------------------------------------------------------------------------------- the step limit
+def time_left(env, obs) -> float:
+    return float(env.unwrapped.observation_layout.part(obs, "globals")[2])
+
+
+def run_to_truncation(env, steps):
+    """Zero actions (no landmark becomes certain, nothing terminates): the time left and truncation flags."""
+    obs, _ = env.reset(seed=0)
+    left, flags = [time_left(env, obs)], []
+    for _ in range(steps):
+        obs, _, terminated, truncated, _ = env.step(np.zeros(2, dtype=np.float32))
+        assert not terminated
+        left.append(time_left(env, obs))
+        flags.append(truncated)
+        if truncated:
+            break
+    return np.array(left), flags
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_registered_ids_carry_their_preset_step_limit(env_id):
+    limit = EnvConfig.from_overrides(**PRESETS[env_id]).max_episode_steps
+    assert gym.spec(env_id).max_episode_steps == limit == {"EKFSLAM-v0": 500, "EKFSLAM-Loop-v0": 800,
+                                                           "EKFSLAM-Large-v0": 1000}[env_id]  # fmt: skip
+    env = gym.make(env_id)
+    assert env.spec.max_episode_steps == env.unwrapped.config.max_episode_steps == limit
+
+
+@pytest.mark.parametrize("form", ["make", "config"])
+@pytest.mark.parametrize("limit", [37, 530])
+def test_a_given_step_limit_truncates_and_zeroes_the_time_left_at_that_step(form, limit):
+    kwargs = {"max_episode_steps": limit} if form == "make" else {"config": {"max_episode_steps": limit}}
+    env = gym.make("EKFSLAM-v0", **kwargs)
+    assert env.spec.max_episode_steps == env.unwrapped.config.max_episode_steps == limit
+    left, flags = run_to_truncation(env, limit + 5)
+    assert flags == [False] * (limit - 1) + [True]
+    assert left[-1] == 0.0 and left[-2] > 0.0 and left[0] == 1.0
+    np.testing.assert_allclose(np.diff(left), -1.0 / limit, atol=1e-6)
+
+
+def test_the_step_limit_survives_pickling_and_rebuilding_from_the_spec():
+    for kwargs in ({"max_episode_steps": 12}, {"config": {"max_episode_steps": 12}}):
+        env = gym.make("EKFSLAM-Loop-v0", **kwargs)
+        env.reset(seed=0)
+        for _ in range(5):
+            env.step(np.zeros(2, dtype=np.float32))
+        clone = pickle.loads(pickle.dumps(env))
+        flags = [clone.step(np.zeros(2, dtype=np.float32))[3] for _ in range(7)]
+        assert flags == [False] * 6 + [True]
+        rebuilt = gym.make(env.spec)
+        assert rebuilt.spec.max_episode_steps == rebuilt.unwrapped.config.max_episode_steps == 12
+        assert run_to_truncation(rebuilt, 20)[1] == [False] * 11 + [True]
+
+
+def test_two_different_step_limits_are_an_error_and_no_time_limit_leaves_the_env_its_own():
+    with pytest.raises(ValueError, match="two step limits"):
+        gym.make("EKFSLAM-v0", max_episode_steps=30, config={"max_episode_steps": 40})
+    same = gym.make("EKFSLAM-v0", max_episode_steps=30, config={"max_episode_steps": 30})
+    assert same.spec.max_episode_steps == 30
+    bare = gym.make("EKFSLAM-v0", max_episode_steps=-1, config={"max_episode_steps": 9})
+    assert bare.spec.max_episode_steps is None
+    left, flags = run_to_truncation(bare, 20)
+    assert flags == [False] * 8 + [True] and left[-1] == 0.0
+    direct = EKFSLAMEnv(max_episode_steps=9)  # no gym.make: the config alone
+    assert run_to_truncation(direct, 20)[1] == [False] * 8 + [True]

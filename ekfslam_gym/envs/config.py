@@ -19,6 +19,7 @@ from typing import Any
 from ..sim.odometry import OdometryNoise
 from ..sim.robot import RobotParams
 from ..sim.sensor import SensorParams
+from .rewards import REWARD_TERMS
 
 
 def _require(condition: bool, name: str, message: str, value: Any) -> None:
@@ -100,30 +101,25 @@ class FilterConfig:
         _integer("filter.resync_every", self.resync_every, 0)
 
 
-@dataclass(frozen=True)
-class RewardConfig:
-    """Weights of the reward terms; the reward is their sum and ``info["reward_terms"]`` names each.
+def _check_reward_weights(self: Any) -> None:
+    for term in REWARD_TERMS:
+        value = getattr(self, term.name)
+        _require(isinstance(value, (int, float)) and math.isfinite(value), f"reward.{term.name}", "must be finite", value)  # fmt: skip
 
-    info_gain: weight of log det Sigma_{t-1} - log det Sigma_t (the D-optimal information gain, the default).
-    a_opt, e_opt: weights of the drops of log trace Sigma and log lambda_max(Sigma) (A- and E-optimality).
-    collision: penalty per step in contact with a wall. control_effort: penalty times |action|^2.
-    step_cost: a constant cost per step (discourages idling once nothing is left to learn).
-    coverage: bonus per m^2 of the world the sensor looks at for the first time (the coverage memory), an
-    exploration shaping for training; 0 by default, so the default reward is the information gain alone.
-    """
 
-    info_gain: float = 1.0
-    a_opt: float = 0.0
-    e_opt: float = 0.0
-    collision: float = 1.0
-    control_effort: float = 0.0
-    step_cost: float = 0.0
-    coverage: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name in ("info_gain", "a_opt", "e_opt", "collision", "control_effort", "step_cost", "coverage"):
-            value = getattr(self, name)
-            _require(isinstance(value, (int, float)) and math.isfinite(value), f"reward.{name}", "must be finite", value)  # fmt: skip
+# The fields come from REWARD_TERMS, the list that also picks the env's reward hooks, so the two cannot drift.
+RewardConfig = dataclasses.make_dataclass(
+    "RewardConfig",
+    [(term.name, float, field(default=term.default)) for term in REWARD_TERMS],
+    frozen=True,
+    namespace={
+        "__module__": __name__,
+        "__post_init__": _check_reward_weights,
+        "__doc__": "Weights of the reward terms; the reward is the sum of the terms with a non-zero weight and "
+        '``info["reward_terms"]`` names each (``ekfslam_gym.envs.rewards.REWARD_TERMS`` lists them).\n\n'
+        + "\n".join(f"{term.name} (default {term.default}): {term.meaning}." for term in REWARD_TERMS),
+    },
+)
 
 
 @dataclass(frozen=True)

@@ -9,23 +9,29 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 from numba import njit
 
 from ..filter.ekf import EKFSLAM, FilterDivergedError
 from ..sim.layouts import make_layout
 from ..sim.world import World
 from .config import EnvConfig
-from .observation import CLIP, fill_observation, make_memory, mark_coverage, observation_layout
-
-REWARD_TERMS = ("info_gain", "a_opt", "e_opt", "collision", "control_effort", "step_cost", "coverage")
+from .observation import (
+    ObservationLayout,
+    fill_observation,
+    make_memory,
+    mark_coverage,
+    observation_constants,
+)
+from .rewards import REWARD_TERMS
 
 
 @njit(cache=True)
 def _step_metrics(mean, cov, observed, true_pose, true_landmarks, read_ids, last_seen, t, loop_gap):
-    """Pose NEES, map RMSE of seen landmarks, new loop closures, largest landmark marginal variance.
+    """Pose NEES, map RMSE of seen landmarks, new loop closures, largest landmark marginal variance, and the
+    number of landmarks seen.
 
-    Also stamps ``last_seen`` for the landmarks read at step t. One compiled call instead of a dozen numpy ones.
+    ``true_pose`` is (x, y, theta), theta unwrapped. Also stamps ``last_seen`` for the landmarks read at step
+    t. One compiled call instead of a dozen numpy ones.
     """
     e0 = true_pose[0] - mean[0]
     e1 = true_pose[1] - mean[1]
@@ -67,7 +73,7 @@ def _step_metrics(mean, cov, observed, true_pose, true_landmarks, read_ids, last
         if last_seen[j] >= 0 and t - last_seen[j] >= loop_gap:
             closures += 1
         last_seen[j] = t
-    return nees, rmse, closures, worst
+    return nees, rmse, closures, worst, seen
 
 
 class EKFSLAMEnv(gym.Env):
@@ -77,8 +83,9 @@ class EKFSLAMEnv(gym.Env):
     A pymunk-simulated differential-drive robot moves among walls and point landmarks (a layout generated anew
     at every reset: an open ``arena``, ``rooms`` with doorways, or a corridor ``loop``). A range-bearing sensor
     reads the landmarks within range and field of view that no wall hides, with Gaussian noise and known
-    identities; noisy odometry reports the robot's motion. An EKF-SLAM inside the env fuses both. The agent
-    sees the filter's belief, never the true map, and is paid for the information it gains.
+    identities; noisy odometry reports the robot's motion. An EKF-SLAM inside the env fuses both (Thrun, Burgard
+    & Fox, *Probabilistic Robotics*, ch. 10). The agent sees the filter's belief, never the true map, and is
+    paid for the information it gains.
 
     ## Action Space
     ``Box(-1, 1, (2,), float32)``: (forward speed, turn rate) as fractions of ``robot.v_max`` (m/s) and
@@ -87,21 +94,26 @@ class EKFSLAMEnv(gym.Env):
 
     ## Observation Space
     ``Box(-5, 5, (D,), float32)`` with D = 4 + 3 + 4k + 3 + B + G^2 + C^2 (164 by default: k = 8 landmark
-    slots, B = 16 scan beams, a 9 x 9 robot-centred window of the coverage memory and a coarse 5 x 5 one), or with ``observation.kind = "dict"`` a ``Dict`` of the same
-    parts: ``pose``, ``pose_cov``, ``landmarks``, ``globals``, ``scan``, ``coverage``, ``coverage_coarse`` (see
-    ``ekfslam_gym.envs.observation`` for every entry and its normalisation).
+    slots, B = 16 scan beams, a 9 x 9 robot-centred window of the coverage memory and a coarse 5 x 5 one), or
+    with ``observation.kind = "dict"`` a ``Dict`` of the same parts: ``pose``, ``pose_cov``, ``landmarks``,
+    ``globals``, ``scan``, ``coverage``, ``coverage_coarse``. ``env.observation_layout`` (an
+    ``ObservationLayout``) says where each part lies, for both kinds; ``ekfslam_gym.envs.observation``
+    describes every entry and its normalisation. The time-left entry of ``globals`` falls from 1 at reset to
+    exactly 0 at the step limit in force (see Episode End).
 
     ## Rewards
-    The sum of the terms in ``info["reward_terms"]`` (those with a non-zero weight in ``reward``):
+    The sum of the terms in ``info["reward_terms"]``, those with a non-zero weight in ``reward`` (the names and
+    default weights are ``ekfslam_gym.envs.rewards.REWARD_TERMS``; each term is the hook
+    ``_reward_<name>(weight)``):
     ``info_gain`` = log det Sigma_{t-1} - log det Sigma_t of the filter's full, fixed-size covariance (weight 1
     by default), so an episode's information-gain terms sum to log det Sigma_0 - log det Sigma_T. Unseen
     landmarks are carried at the bounded prior ``filter.landmark_prior`` (100 m^2), so discovering one pays
     ln(landmark_prior^2 / det(Gz Q Gz^T)) = ln(landmark_prior^2 / (r^2 range_std^2 bearing_std^2)), about
     23.3 - 2 ln r nats for a landmark first read at r m with the default sensor; the pose starts at
     ``filter.pose_prior``.
-    ``collision`` = -1 per step in contact with a wall. Optional: ``a_opt``, ``e_opt`` (drops of ln trace and
-    ln lambda_max of Sigma), ``control_effort`` (-w |a|^2), ``step_cost`` (-w per step), ``coverage`` (w per m^2
-    the sensor looks at for the first time: an exploration shaping for training).
+    ``collision`` = -1 per step in contact with a wall (weight 1 by default). Optional: ``a_opt``, ``e_opt``
+    (drops of ln trace and ln lambda_max of Sigma), ``control_effort`` (-w |a|^2), ``step_cost`` (-w per step),
+    ``coverage`` (w per m^2 the sensor looks at for the first time: an exploration shaping for training).
 
     Standing still earns little: every prediction adds odometry noise (the noise floor), a negative term, and
     re-observing the same landmarks pays ever less (the information about them grows like ln t). Because the
@@ -114,15 +126,29 @@ class EKFSLAMEnv(gym.Env):
     takes a first reading and corrects, and Sigma_0 is the belief after that (``info["log_det"]``).
 
     ## Episode End
-    Terminated: on a wall contact if ``terminate_on_collision``; when every landmark's marginal standard
-    deviation is below ``done_std`` m; when the filter fails numerically (``info["filter_failed"]``, never an
-    exception). Truncated: after ``max_episode_steps`` steps (from the config; the env truncates itself).
+    Terminated (``_is_terminated``): on a wall contact if ``terminate_on_collision``; when every landmark's
+    marginal standard deviation is below ``done_std`` m; when the filter fails numerically
+    (``info["filter_failed"]``, never an exception). Truncated (``_is_truncated``): after N steps, where N, the
+    step limit, is one number for the TimeLimit wrapper of ``gym.make``, the env's own truncation and the
+    time-left entry, and ``env.spec.max_episode_steps == env.unwrapped.config.max_episode_steps == N``:
+    the registered limit by default (500, 800, 1000, in each id's spec); ``gym.make(id, max_episode_steps=N)``
+    sets it (the ``HorizonSync`` wrapper, right above the TimeLimit, passes N to ``set_max_episode_steps``); so
+    does a config whose ``max_episode_steps`` differs from the registered limit, e.g.
+    ``gym.make(id, config={"max_episode_steps": N})`` (the TimeLimit is rebuilt with N). Two different limits,
+    neither the registered one, raise ``ValueError``. Built without ``gym.make`` (or with
+    ``max_episode_steps=-1``), the env truncates itself at ``config.max_episode_steps``.
 
     ## Arguments
     ``gymnasium.make("EKFSLAM-v0", config=None, render_mode=None, **overrides)``: ``config`` is an
-    ``EnvConfig``, a path to a YAML file (see ``configs/env/``) or a mapping of sections; ``overrides`` are
-    sections given as keyword arguments, e.g. ``world={"n_landmarks": 50}, reward={"collision": 2.0}``.
-    A bad value raises ``ValueError`` naming the field.
+    ``EnvConfig``, a path to a YAML file (see ``configs/env/``) or a mapping of sections, and replaces the id's
+    preset; ``overrides`` are sections given as keyword arguments, applied on top of it, e.g.
+    ``world={"n_landmarks": 50}, reward={"collision": 2.0}``. A bad value raises ``ValueError`` naming the
+    field. ``max_episode_steps`` given to ``gym.make`` is ``gym.make``'s own argument (see Episode End); given
+    to ``EKFSLAMEnv(...)`` directly it is a config override.
+
+    After ``reset``, agents and evaluation read the belief through public, read-only views: ``filter``
+    (``mean``, ``cov``, ``observed``, ...), ``observation_layout``, ``bounds``, ``coverage_memory``,
+    ``elapsed_steps``; ``world`` and ``true_landmarks`` are privileged (baselines and evaluation only).
 
     ## Registered Configurations
     - ``EKFSLAM-v0``: 20 x 20 m arena, 30 landmarks, 500 steps of 0.1 s.
@@ -158,25 +184,36 @@ class EKFSLAMEnv(gym.Env):
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": int(round(1.0 / config.dt))}
 
-        obs_cfg = config.observation
-        self._layout_slices = observation_layout(
-            obs_cfg.k_nearest, config.sensor.n_beams, obs_cfg.grid, obs_cfg.coarse_grid
+        self._layout = ObservationLayout.from_config(config.observation, config.sensor)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self.observation_space = self._layout.space(config.observation.kind)
+        self._obs = np.zeros(self._layout.size, dtype=np.float32)
+        self._flat = config.observation.kind == "box"
+        self._constants = observation_constants(config.observation, config.sensor)
+        # The reward hooks of the terms with a non-zero weight, in REWARD_TERMS order: (name, weight, hook).
+        self._reward_hooks = tuple(
+            (term.name, weight, getattr(type(self), f"_reward_{term.name}"))
+            for term in REWARD_TERMS
+            if (weight := float(getattr(config.reward, term.name)))
         )
-        size = sum(s.stop - s.start for s in self._layout_slices.values())
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
-        flat = spaces.Box(-CLIP, CLIP, shape=(size,), dtype=np.float32)
-        if obs_cfg.kind == "box":
-            self.observation_space = flat
-        else:
-            self.observation_space = spaces.Dict(
-                {name: spaces.Box(-CLIP, CLIP, shape=(s.stop - s.start,), dtype=np.float32)
-                 for name, s in self._layout_slices.items()}
-            )  # fmt: skip
-        self._obs = np.zeros(size, dtype=np.float32)
-        self._weights = np.array([getattr(config.reward, name) for name in REWARD_TERMS])
+        # Constants of the step, read once here rather than through the config at every step.
+        self._v_max, self._omega_max = config.robot.v_max, config.robot.omega_max
+        self._done_variance = config.done_std**2 if config.done_std > 0 else -math.inf
+        self._max_steps = config.max_episode_steps
         self._world: World | None = None
         self._ekf: EKFSLAM | None = None
+        self._belief: tuple[np.ndarray, ...] | None = None
+        self._t = 0
         self._renderer = None
+
+    def set_max_episode_steps(self, steps: int) -> None:
+        """Make ``steps`` the episode's step limit: truncation and the observation's time left follow it.
+
+        ``gym.make`` calls this (through ``HorizonSync``) when given ``max_episode_steps``, so the TimeLimit
+        wrapper and the env agree; ``config.max_episode_steps`` reports the limit in force.
+        """
+        self.config = EnvConfig.from_overrides(self.config, max_episode_steps=steps)
+        self._max_steps = self.config.max_episode_steps
 
     # ------------------------------------------------------------------ episode
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -187,16 +224,12 @@ class EKFSLAMEnv(gym.Env):
         layout = make_layout(cfg.world.layout, rng, cfg.world.n_landmarks, **layout_kwargs)
         self._world = World(layout, cfg.robot, cfg.sensor, cfg.odometry, None, cfg.dt, cfg.substeps)
         f = cfg.filter
-        self._ekf = EKFSLAM(
+        self._ekf = ekf = EKFSLAM(
             layout.n_landmarks, motion_model=f.motion_model, dt=cfg.dt, measurement_noise=cfg.sensor.cov,
             landmark_prior=f.landmark_prior, pose_prior=f.pose_prior, init_mode=f.init_mode, update=f.update,
             initial_pose=layout.start, min_range=max(cfg.sensor.min_range, 1e-3), resync_every=f.resync_every,
         )  # fmt: skip
         self._bounds = np.asarray(layout.bounds, dtype=np.float64)
-        self._centre = np.array(
-            [0.5 * (self._bounds[0] + self._bounds[2]), 0.5 * (self._bounds[1] + self._bounds[3])]
-        )
-        self._half_size = 0.5 * max(self._bounds[2] - self._bounds[0], self._bounds[3] - self._bounds[1])
         self._true_landmarks = np.ascontiguousarray(layout.landmarks, dtype=np.float64)
         self._memory = make_memory(self._bounds, cfg.observation.memory_resolution)
         self._last_seen = np.full(layout.n_landmarks, -1, dtype=np.int64)
@@ -205,179 +238,239 @@ class EKFSLAMEnv(gym.Env):
         self._collisions = 0
         self._path_length = 0.0
         self._filter_failed = False
+        self._collided = False
+        self._action = (0.0, 0.0)
         self._trail_true: list[tuple[float, float]] = []
         self._trail_est: list[tuple[float, float]] = []
 
         readings = self._world.sense(rng)
-        self._ekf.correct(readings.ids, readings.z)
-        self._log_det = self._ekf.log_det
-        self._trace = float(np.trace(self._ekf._cov)) if self._weights[1] else 0.0
-        self._lambda_max = self._largest_eigenvalue() if self._weights[2] else 0.0
+        ekf.correct(readings.ids, readings.z)
+        self._log_det = self._prev_log_det = ekf.log_det
+        self._belief = self._belief_views()
+        mean, cov, observed, _ = self._belief
+        weights = self.config.reward
+        self._trace = float(np.trace(cov)) if weights.a_opt else 0.0
+        self._lambda_max = self._largest_eigenvalue(cov) if weights.e_opt else 0.0
         self._last_readings = readings
         self._odometry = np.zeros(3 if f.motion_model == "odometry" else 2)
         self._odometry_cov = np.zeros((self._odometry.size, self._odometry.size))
-        self._mark_and_trail()
-        nees, rmse, _, _ = self._metrics(readings.ids)
-        info = self._info({"info_gain": 0.0}, False, nees, rmse)
+        self._newly_covered = self._mark_and_trail()
+        nees, rmse, _, self._worst_variance, seen = _step_metrics(
+            mean, cov, observed, self._world.pose_tuple, self._true_landmarks, readings.ids, self._last_seen,
+            self._t, cfg.loop_gap,
+        )  # fmt: skip
+        info = self._info({"info_gain": 0.0}, nees, rmse, seen)
         if self.render_mode == "human":
             self.render()
         return self._observation(), info
 
     def step(self, action):
-        if self._ekf is None:
+        ekf = self._ekf
+        if ekf is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (2,):
-            raise ValueError(f"action must have shape (2,), got {a.shape}")
-        a0, a1 = float(a[0]), float(a[1])
-        if not (math.isfinite(a0) and math.isfinite(a1)):
-            raise ValueError(f"action must be finite, got {action!r}")
-        a0 = min(max(a0, -1.0), 1.0)
-        a1 = min(max(a1, -1.0), 1.0)
-        cfg = self.config
-        world, ekf, rng = self._world, self._ekf, self.np_random
+        a0, a1 = _clipped_action(action)
+        world, rng = self._world, self.np_random
 
-        prev_pose = world._pose
-        collided = world.step(a0 * cfg.robot.v_max, a1 * cfg.robot.omega_max)
-        self._path_length += math.hypot(world._pose[0] - prev_pose[0], world._pose[1] - prev_pose[1])
+        x0, y0, _ = world.pose_tuple
+        collided = world.step(a0 * self._v_max, a1 * self._omega_max)
+        x1, y1, _ = world.pose_tuple
+        self._path_length += math.hypot(x1 - x0, y1 - y0)
         self._collisions += collided
-        odometry = (
-            world.odometry(rng) if self._ekf.motion_model == "odometry" else world.velocity_odometry(rng)
-        )
+        odometry = world.odometry(rng) if ekf.motion_model == "odometry" else world.velocity_odometry(rng)
         readings = world.sense(rng)
         self._odometry, self._odometry_cov, self._last_readings = odometry.u, odometry.cov, readings
         self._t += 1
+        self._action = (a0, a1)
+        self._collided = collided
 
-        terms: dict[str, float] = {}
         try:
             ekf.predict(odometry.u, control_cov=odometry.cov)
             ekf.correct(readings.ids, readings.z)
             failed = not math.isfinite(ekf.log_det)
         except FilterDivergedError:
             failed = True
+        mean, cov, observed, _ = self._belief
         if failed:
             self._filter_failed = True
-            terms["info_gain"] = 0.0
-            info = self._info(terms, collided, math.nan, math.nan)
-            return self._obs_out(), 0.0, True, False, info
+            info = self._info({"info_gain": 0.0}, math.nan, math.nan, int(np.count_nonzero(observed)))
+            return self._observation_out(), 0.0, True, False, info
 
-        w = self._weights
-        log_det = ekf.log_det
-        if w[0]:
-            terms["info_gain"] = w[0] * (self._log_det - log_det)
-        self._log_det = log_det
-        if w[1]:
-            trace = float(np.trace(ekf._cov))
-            terms["a_opt"] = w[1] * (math.log(self._trace) - math.log(trace))
-            self._trace = trace
-        if w[2]:
-            largest = self._largest_eigenvalue()
-            terms["e_opt"] = w[2] * (math.log(self._lambda_max) - math.log(largest))
-            self._lambda_max = largest
-        if w[3]:
-            terms["collision"] = -w[3] * collided
-        if w[4]:
-            terms["control_effort"] = -w[4] * (a0 * a0 + a1 * a1)
-        if w[5]:
-            terms["step_cost"] = -w[5]
-        newly_covered = self._mark_and_trail()
-        if w[6]:
-            terms["coverage"] = w[6] * newly_covered * self.config.observation.memory_resolution**2
-        reward = sum(terms.values())
-
-        nees, rmse, closures, worst = self._metrics(readings.ids)
+        self._prev_log_det, self._log_det = self._log_det, ekf.log_det
+        self._newly_covered = self._mark_and_trail()
+        terms = self._rewards()
+        reward = sum(terms.values(), 0.0)
+        nees, rmse, closures, self._worst_variance, seen = _step_metrics(
+            mean, cov, observed, world.pose_tuple, self._true_landmarks, readings.ids, self._last_seen, self._t,
+            self.config.loop_gap,
+        )  # fmt: skip
         self._loop_closures += closures
-        terminated = (collided and cfg.terminate_on_collision) or (
-            cfg.done_std > 0 and worst < cfg.done_std**2
-        )
-        truncated = self._t >= cfg.max_episode_steps and not terminated
-        info = self._info(terms, collided, nees, rmse)
+        terminated = self._is_terminated()
+        truncated = not terminated and self._is_truncated()
+        info = self._info(terms, nees, rmse, seen)
         if self.render_mode == "human":
             self.render()
-        return self._observation(), reward, bool(terminated), bool(truncated), info
+        return self._observation(), reward, terminated, truncated, info
 
-    # ------------------------------------------------------------------ pieces
-    def _largest_eigenvalue(self) -> float:
-        return float(np.linalg.eigvalsh(self._ekf._cov)[-1])
+    # ------------------------------------------------------------------ hooks of a step
+    def _rewards(self) -> dict[str, float]:
+        """The weighted reward terms by name, those with a non-zero weight only (``info["reward_terms"]``);
+        the reward is their sum. Each comes from its hook ``_reward_<name>(weight)`` (see ``rewards``)."""
+        return {name: hook(self, weight) for name, weight, hook in self._reward_hooks}
 
-    def _metrics(self, read_ids):
-        ekf = self._ekf
-        return _step_metrics(
-            ekf._mean, ekf._cov, ekf._observed, np.asarray(self._world._pose), self._true_landmarks, read_ids,
-            self._last_seen, self._t, self.config.loop_gap,
-        )  # fmt: skip
+    def _reward_info_gain(self, weight: float) -> float:
+        return weight * (self._prev_log_det - self._log_det)
 
-    def _mark_and_trail(self) -> int:
-        """Update the coverage memory (and the trails when rendering); returns the cells newly covered."""
-        sensor = self.config.sensor
-        resolution = self.config.observation.memory_resolution
-        new = mark_coverage(
-            self._memory, self._ekf._mean, self._bounds, resolution, sensor.max_range, sensor.fov
-        )
-        if self.render_mode is not None:
-            pose = self._world._pose
-            self._trail_true.append((pose[0], pose[1]))
-            self._trail_est.append((float(self._ekf._mean[0]), float(self._ekf._mean[1])))
-        return new
+    def _reward_a_opt(self, weight: float) -> float:
+        trace = float(np.trace(self._belief[1]))
+        value = weight * (math.log(self._trace) - math.log(trace))
+        self._trace = trace
+        return value
 
-    def _observation(self):
-        ekf, cfg = self._ekf, self.config
-        time_left = max(0.0, 1.0 - self._t / cfg.max_episode_steps)
-        obs = cfg.observation
-        fill_observation(
-            self._obs, ekf._mean, ekf._cov, ekf._observed, self._log_det, ekf._P, self._world.scan(), self._memory,
-            self._bounds, obs.memory_resolution, obs.grid, obs.grid_extent, obs.coarse_grid, obs.coarse_extent,
-            self._centre, self._half_size,
-            cfg.sensor.max_range, cfg.sensor.scan_max_range, time_left, obs.k_nearest,
-        )  # fmt: skip
-        return self._obs_out()
+    def _reward_e_opt(self, weight: float) -> float:
+        largest = self._largest_eigenvalue(self._belief[1])
+        value = weight * (math.log(self._lambda_max) - math.log(largest))
+        self._lambda_max = largest
+        return value
 
-    def _obs_out(self):
-        if self.config.observation.kind == "box":
-            return self._obs.copy()
-        return {name: self._obs[s].copy() for name, s in self._layout_slices.items()}
+    def _reward_collision(self, weight: float) -> float:
+        return -weight * self._collided
 
-    def _info(self, terms, collided, nees, rmse) -> dict[str, Any]:
-        ekf = self._ekf
+    def _reward_control_effort(self, weight: float) -> float:
+        a0, a1 = self._action
+        return -weight * (a0 * a0 + a1 * a1)
+
+    def _reward_step_cost(self, weight: float) -> float:
+        return -weight
+
+    def _reward_coverage(self, weight: float) -> float:
+        return weight * self._newly_covered * self.config.observation.memory_resolution**2
+
+    def _is_terminated(self) -> bool:
+        """A wall contact when ``terminate_on_collision``, or every landmark certain to ``done_std``."""
+        if self._collided and self.config.terminate_on_collision:
+            return True
+        return self._worst_variance < self._done_variance
+
+    def _is_truncated(self) -> bool:
+        """The step limit (``config.max_episode_steps``, which a ``gym.make`` TimeLimit sets) is reached."""
+        return self._t >= self._max_steps
+
+    def _info(self, terms: dict[str, float], nees: float, rmse: float, landmarks_seen: int) -> dict[str, Any]:
+        """The step's ``info``; arrays the filter updates in place are copied, the odometry's are new each step."""
+        mean, cov, _, _ = self._belief
         return {
             "step": self._t,
             "true_pose": self._world.pose,
-            "pose": ekf._mean[:3].copy(),
-            "pose_cov": ekf._cov[:3, :3].copy(),
+            "pose": mean[:3].copy(),
+            "pose_cov": cov[:3, :3].copy(),
             "log_det": self._log_det,
             "reward_terms": terms,
-            "landmarks_seen": int(ekf._observed.sum()),
-            "collision": bool(collided),
+            "landmarks_seen": landmarks_seen,
+            "collision": self._collided,
             "collisions": self._collisions,
             "pose_nees": nees,
             "map_rmse": rmse,
             "loop_closures": self._loop_closures,
             "path_length": self._path_length,
-            "odometry": self._odometry.copy(),
-            "odometry_cov": self._odometry_cov.copy(),
+            "odometry": self._odometry,
+            "odometry_cov": self._odometry_cov,
             # A (ids, z) named tuple, not arrays: the number of readings varies, and vector envs stack arrays.
             "readings": self._last_readings,
             "filter_failed": self._filter_failed,
         }
 
+    # ------------------------------------------------------------------ pieces
+    def _belief_views(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The filter's (mean, cov, observed, pose_cov_given_map): its public read-only views, fetched once per
+        episode rather than at every step. They stay current because the filter updates its arrays in place."""
+        ekf = self._ekf
+        return ekf.mean, ekf.cov, ekf.observed, ekf.pose_cov_given_map
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_belief"] = None  # views: a pickle would copy them apart from the filter; rebuilt on load
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        if self._ekf is not None:
+            self._belief = self._belief_views()
+
+    @staticmethod
+    def _largest_eigenvalue(cov: np.ndarray) -> float:
+        return float(np.linalg.eigvalsh(cov)[-1])
+
+    def _mark_and_trail(self) -> int:
+        """Update the coverage memory (and the trails when rendering); returns the cells newly covered."""
+        mean = self._belief[0]
+        sensor = self.config.sensor
+        new = mark_coverage(
+            self._memory, mean, self._bounds, self.config.observation.memory_resolution, sensor.max_range,
+            sensor.fov,
+        )  # fmt: skip
+        if self.render_mode is not None:
+            x, y, _ = self._world.pose_tuple
+            self._trail_true.append((x, y))
+            self._trail_est.append((float(mean[0]), float(mean[1])))
+        return new
+
+    def _observation(self):
+        mean, cov, observed, pose_given_map = self._belief
+        time_left = max(0.0, 1.0 - self._t / self._max_steps)
+        fill_observation(
+            self._obs, self._layout.offsets, self._constants, mean, cov, observed, self._log_det, pose_given_map,
+            self._world.scan(), self._memory, self._bounds, time_left,
+        )  # fmt: skip
+        return self._observation_out()
+
+    def _observation_out(self):
+        return self._obs.copy() if self._flat else self._layout.split(self._obs)
+
     # ------------------------------------------------------------------ access for agents and evaluation
+    @property
+    def observation_layout(self) -> ObservationLayout:
+        """Where each part of the observation lies (``slices``, ``part(observation, name)``)."""
+        return self._layout
+
     @property
     def filter(self) -> EKFSLAM:
         """The env's filter (read-only views of its state; planners should work on ``filter.copy()``)."""
-        if self._ekf is None:
-            raise gym.error.ResetNeeded("call reset() first")
+        self._require_reset()
         return self._ekf
 
     @property
     def world(self) -> World:
         """The simulator (privileged: true poses and walls, for baselines and evaluation only)."""
-        if self._world is None:
-            raise gym.error.ResetNeeded("call reset() first")
+        self._require_reset()
         return self._world
 
     @property
     def true_landmarks(self) -> np.ndarray:
-        return self._true_landmarks
+        """The true landmark positions (n, 2) in m, read-only (privileged: for baselines and evaluation)."""
+        self._require_reset()
+        return _read_only(self._true_landmarks)
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """The world's extent (xmin, ymin, xmax, ymax) in m, read-only."""
+        self._require_reset()
+        return _read_only(self._bounds)
+
+    @property
+    def coverage_memory(self) -> np.ndarray:
+        """Where the sensor has looked, read-only: rows along y from ``bounds``' corner,
+        ``observation.memory_resolution`` m per cell, 1 = looked at. The coverage windows are read from it."""
+        self._require_reset()
+        return _read_only(self._memory)
+
+    @property
+    def elapsed_steps(self) -> int:
+        """Steps taken since the last reset."""
+        return self._t
+
+    def _require_reset(self) -> None:
+        if self._ekf is None:
+            raise gym.error.ResetNeeded("call reset() first")
 
     # ------------------------------------------------------------------ rendering
     def render(self):
@@ -391,24 +484,25 @@ class EKFSLAMEnv(gym.Env):
         if self._renderer is None:
             self._renderer = Renderer(self.render_mode, fps=self.metadata["render_fps"])
         ekf, world, cfg = self._ekf, self._world, self.config
+        observed = ekf.observed
         scene = Scene(
             bounds=self._bounds,
             walls=np.asarray(world.layout.walls),
             wall_radius=float(world.layout.wall_radius),
             robot_radius=cfg.robot.radius,
             landmarks_true=self._true_landmarks,
-            landmarks_est=ekf._mean[3:].reshape(-1, 2).copy(),
+            landmarks_est=ekf.landmarks.copy(),
             landmark_covs=ekf.landmark_covs(),
-            seen=ekf._observed.copy(),
+            seen=observed.copy(),
             pose_true=world.pose,
-            pose_est=ekf._mean[:3].copy(),
-            pose_cov=ekf._cov[:3, :3].copy(),
+            pose_est=ekf.pose.copy(),
+            pose_cov=ekf.pose_cov.copy(),
             read_ids=np.asarray(self._last_readings.ids),
             trail_true=np.array(self._trail_true).reshape(-1, 2),
             trail_est=np.array(self._trail_est).reshape(-1, 2),
             max_range=cfg.sensor.max_range,
             fov=cfg.sensor.fov,
-            text=f"t={self._t}  log det={self._log_det:.1f}  seen={int(ekf._observed.sum())}/{ekf.n_landmarks}",
+            text=f"t={self._t}  log det={self._log_det:.1f}  seen={int(observed.sum())}/{ekf.n_landmarks}",
         )
         return self._renderer.render(scene)
 
@@ -416,3 +510,27 @@ class EKFSLAMEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+
+def _clipped_action(action) -> tuple[float, float]:
+    """(forward, turn) as floats clipped to [-1, 1]; ValueError, before anything changes, for a wrong shape or
+    a non-finite value. A float array of shape (2,), what agents pass, takes the fast path."""
+    if type(action) is np.ndarray and action.shape == (2,) and action.dtype.kind == "f":
+        a0, a1 = action.tolist()
+    else:
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != (2,):
+            raise ValueError(f"action must have shape (2,), got {a.shape}")
+        a0, a1 = float(a[0]), float(a[1])
+    if not (math.isfinite(a0) and math.isfinite(a1)):
+        raise ValueError(f"action must be finite, got {action!r}")
+    return (
+        -1.0 if a0 < -1.0 else 1.0 if a0 > 1.0 else a0,
+        -1.0 if a1 < -1.0 else 1.0 if a1 > 1.0 else a1,
+    )
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    view = array.view()
+    view.setflags(write=False)
+    return view

@@ -146,6 +146,12 @@ class World:
         return np.array([x, y, wrap_angle(theta)])
 
     @property
+    def pose_tuple(self) -> tuple[float, float, float]:
+        """True pose (x m, y m, theta rad) as the immutable tuple the world keeps, theta unwrapped (continuous
+        over the episode): ``pose`` without building an array, for callers on the env's hot path."""
+        return self._pose
+
+    @property
     def last_motion(self) -> tuple[np.ndarray, np.ndarray]:
         """True poses (3,) before and after the last step, headings unwrapped (their difference is the turn)."""
         return np.array(self._prev_pose), np.array(self._pose)

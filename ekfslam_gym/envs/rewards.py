@@ -1,0 +1,47 @@
+"""The reward terms by name: the one list that makes ``RewardConfig``'s fields and picks the env's reward hooks.
+
+The reward of a step is the sum of the terms whose weight is non-zero; ``info["reward_terms"]`` names each.
+Every term is computed by the env's hook ``_reward_<name>(weight)`` (see ``EKFSLAMEnv._rewards``), so a new
+term is one entry here and one method there. The information-theoretic terms are the optimality criteria of
+experimental design applied to the SLAM covariance (D-, A- and E-optimality; see the README's *The maths,
+briefly*, and the Freiburg *Robot Mapping* course by C. Stachniss on active SLAM).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class RewardTerm:
+    """One reward term: its name (the ``reward`` config field and the ``reward_terms`` key), its default
+    weight and what the weight multiplies."""
+
+    name: str
+    default: float
+    meaning: str
+
+
+REWARD_TERMS: tuple[RewardTerm, ...] = (
+    RewardTerm(
+        "info_gain",
+        1.0,
+        "weight of log det Sigma_{t-1} - log det Sigma_t (the D-optimal information gain, the default)",
+    ),
+    RewardTerm("a_opt", 0.0, "weight of the drop of ln trace Sigma (A-optimality)"),
+    RewardTerm("e_opt", 0.0, "weight of the drop of ln lambda_max(Sigma) (E-optimality)"),
+    RewardTerm("collision", 1.0, "penalty per step in contact with a wall"),
+    RewardTerm("control_effort", 0.0, "penalty times |action|^2"),
+    RewardTerm(
+        "step_cost", 0.0, "a constant cost per step (discourages idling once nothing is left to learn)"
+    ),
+    RewardTerm(
+        "coverage",
+        0.0,
+        "bonus per m^2 of the world the sensor looks at for the first time (the coverage memory), an "
+        "exploration shaping for training; 0 by default, so the default reward is the information gain and "
+        "the collision penalty",
+    ),
+)
+
+REWARD_NAMES: tuple[str, ...] = tuple(term.name for term in REWARD_TERMS)
