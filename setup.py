@@ -24,7 +24,7 @@ def _kernel_table():
     """``ekfslam_gym.compiled`` imported without running the package ``__init__`` files (gymnasium, pymunk
     and SB3 are not build dependencies; only numpy and numba are)."""
     os.environ["EKFSLAM_GYM_JIT"] = "1"  # do not load a stale extension while building a new one
-    for name in ("ekfslam_gym", "ekfslam_gym.sim", "ekfslam_gym.filter"):
+    for name in ("ekfslam_gym", "ekfslam_gym.sim", "ekfslam_gym.filter", "ekfslam_gym.envs"):
         stub = types.ModuleType(name)
         stub.__path__ = [str(PACKAGE.joinpath(*name.split(".")[1:]))]
         sys.modules[name] = stub

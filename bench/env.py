@@ -23,7 +23,8 @@ import numpy as np  # noqa: E402
 
 import ekfslam_gym  # noqa: E402, F401
 from ekfslam_gym.envs import EKFSLAMEnv  # noqa: E402
-from ekfslam_gym.envs.observation import fill_observation, observation_constants  # noqa: E402
+from ekfslam_gym.envs.kernels import fill_observation
+from ekfslam_gym.envs.observation import observation_constants  # noqa: E402
 
 
 def steps_per_second(env, actions: np.ndarray, seed: int = 0) -> float:

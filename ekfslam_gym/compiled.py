@@ -64,6 +64,21 @@ KERNELS: dict[str, tuple[str, str, str]] = {
         "velocity_reading",
         f"Tuple(({_F8_1}, {_F8_2}, {_F8_1}))(f8, f8, f8, f8, f8, f8, f8, {_F8_1}, {_F8_1})",
     ),
+    "mark_coverage": (
+        "ekfslam_gym.envs.kernels",
+        "mark_coverage",
+        f"i8({_F8_2}, {_F8_1}, {_F8_1}, f8, f8, f8)",
+    ),
+    "fill_observation": (
+        "ekfslam_gym.envs.kernels",
+        "fill_observation",
+        f"void(f4[::1], i8[::1], {_F8_1}, {_F8_1}, {_F8_2}, b1[::1], f8, {_F8_2}, {_F8_1}, {_F8_2}, {_F8_1}, f8)",
+    ),
+    "step_metrics": (
+        "ekfslam_gym.envs.kernels",
+        "step_metrics",
+        f"Tuple((f8, f8, i8, f8, i8))({_F8_1}, {_F8_2}, b1[::1], UniTuple(f8, 3), {_F8_2}, i8[::1], i8[::1], i8, i8)",
+    ),
 }
 
 # Every file the kernels' machine code depends on, relative to the package: the build compiles their digest
@@ -76,6 +91,8 @@ SOURCES: tuple[str, ...] = (
     "filter/kernels.py",
     "sim/geometry.py",
     "sim/odometry_kernels.py",
+    "envs/kernels.py",
+    "envs/observation_codes.py",
 )
 AOT_MODULE = "ekfslam_gym._aot"
 

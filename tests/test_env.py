@@ -356,7 +356,8 @@ def test_discovery_reward_matches_the_documented_formula():
 
 
 def test_coverage_window_is_robot_centred_and_turns_with_the_heading():
-    from ekfslam_gym.envs.observation import make_memory, mark_coverage
+    from ekfslam_gym.envs.kernels import mark_coverage
+    from ekfslam_gym.envs.observation import make_memory
 
     env = EKFSLAMEnv(world={"layout_kwargs": {"width": 40.0, "height": 40.0}})
     obs, _ = env.reset(seed=0)
@@ -412,11 +413,11 @@ def test_coarse_window_holds_the_fraction_looked_at_and_can_be_disabled():
     [({}, 16), ({"k_nearest": 3, "grid": 5, "coarse_grid": 3}, 7), ({"kind": "dict", "coarse_grid": 0}, 16)],
 )
 def test_observation_layout_is_where_the_spaces_and_the_kernel_put_each_part(observation, n_beams):
+    from ekfslam_gym.envs.kernels import fill_observation
     from ekfslam_gym.envs.observation import (
         LANDMARK_FEATURES,
         PARTS,
         ObservationLayout,
-        fill_observation,
         observation_constants,
     )
 

@@ -56,7 +56,9 @@ def test_velocity_motion_matches_corrected_textbook_form():
     ratio = v / omega
     expected = [
         pose[0] - ratio * math.sin(pose[2]) + ratio * math.sin(pose[2] + omega * dt),
-        pose[1] + ratio * math.cos(pose[2]) - ratio * math.cos(pose[2] + omega * dt),  # the course's lecture notes had -, +
+        pose[1]
+        + ratio * math.cos(pose[2])
+        - ratio * math.cos(pose[2] + omega * dt),  # the course's lecture notes had -, +
         pose[2] + omega * dt,
     ]
     np.testing.assert_allclose(new_pose, expected, rtol=0, atol=1e-12)

@@ -1,21 +1,32 @@
-"""The Gymnasium environment: configuration, observation, rendering and the env that composes them."""
+"""The Gymnasium environment: configuration, observation, rewards, rendering and the env that composes them.
 
-from .config import EnvConfig, FilterConfig, ObservationConfig, RewardConfig, WorldConfig
-from .ekfslam_env import EKFSLAMEnv
-from .horizon import HorizonSync
-from .observation import ObservationLayout
-from .presets import PRESETS
-from .rewards import REWARD_TERMS
+The names below are imported on first use, so that registering the ids (``import ekfslam_gym``) does not load
+the simulator and the filter.
+"""
 
-__all__ = [
-    "EKFSLAMEnv",
-    "EnvConfig",
-    "FilterConfig",
-    "HorizonSync",
-    "ObservationConfig",
-    "ObservationLayout",
-    "PRESETS",
-    "REWARD_TERMS",
-    "RewardConfig",
-    "WorldConfig",
-]
+from __future__ import annotations
+
+import importlib
+
+_HOMES = {
+    "EKFSLAMEnv": "ekfslam_env",
+    "EnvConfig": "config",
+    "FilterConfig": "config",
+    "ObservationConfig": "config",
+    "RewardConfig": "config",
+    "WorldConfig": "config",
+    "HorizonSync": "horizon",
+    "ObservationLayout": "observation",
+    "PRESETS": "presets",
+    "REWARD_TERMS": "rewards",
+}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str):
+    if name not in _HOMES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_HOMES[name]}", __name__), name)
+    globals()[name] = value
+    return value

@@ -9,71 +9,14 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from numba import njit
 
+from .. import compiled
 from ..filter.ekf import EKFSLAM, FilterDivergedError
 from ..sim.layouts import make_layout
 from ..sim.world import World
 from .config import EnvConfig
-from .observation import (
-    ObservationLayout,
-    fill_observation,
-    make_memory,
-    mark_coverage,
-    observation_constants,
-)
+from .observation import ObservationLayout, make_memory, observation_constants
 from .rewards import REWARD_TERMS
-
-
-@njit(cache=True)
-def _step_metrics(mean, cov, observed, true_pose, true_landmarks, read_ids, last_seen, t, loop_gap):
-    """Pose NEES, map RMSE of seen landmarks, new loop closures, largest landmark marginal variance, and the
-    number of landmarks seen.
-
-    ``true_pose`` is (x, y, theta), theta unwrapped. Also stamps ``last_seen`` for the landmarks read at step
-    t. One compiled call instead of a dozen numpy ones.
-    """
-    e0 = true_pose[0] - mean[0]
-    e1 = true_pose[1] - mean[1]
-    e2 = (true_pose[2] - mean[2] + math.pi) % (2.0 * math.pi) - math.pi
-    a, b, c = cov[0, 0], cov[0, 1], cov[0, 2]
-    d, e, f = cov[1, 1], cov[1, 2], cov[2, 2]
-    # e^T Sigma_xx^-1 e by cofactors of the symmetric 3x3 pose block.
-    c00 = d * f - e * e
-    c01 = c * e - b * f
-    c02 = b * e - c * d
-    c11 = a * f - c * c
-    c12 = b * c - a * e
-    c22 = a * d - b * b
-    det = a * c00 + b * c01 + c * c02
-    nees = (
-        c00 * e0 * e0 + c11 * e1 * e1 + c22 * e2 * e2 + 2.0 * (c01 * e0 * e1 + c02 * e0 * e2 + c12 * e1 * e2)
-    ) / det
-
-    n = observed.shape[0]
-    squared, seen = 0.0, 0
-    worst = 0.0
-    for j in range(n):
-        lj = 3 + 2 * j
-        if observed[j]:
-            dx = mean[lj] - true_landmarks[j, 0]
-            dy = mean[lj + 1] - true_landmarks[j, 1]
-            squared += dx * dx + dy * dy
-            seen += 1
-            p, q, r = cov[lj, lj], cov[lj, lj + 1], cov[lj + 1, lj + 1]
-            largest = 0.5 * (p + r) + math.sqrt(0.25 * (p - r) * (p - r) + q * q)
-            worst = max(worst, largest)
-        else:
-            worst = np.inf
-    rmse = math.sqrt(squared / seen) if seen else 0.0
-
-    closures = 0
-    for i in range(read_ids.shape[0]):
-        j = read_ids[i]
-        if last_seen[j] >= 0 and t - last_seen[j] >= loop_gap:
-            closures += 1
-        last_seen[j] = t
-    return nees, rmse, closures, worst, seen
 
 
 class EKFSLAMEnv(gym.Env):
@@ -255,7 +198,7 @@ class EKFSLAMEnv(gym.Env):
         self._odometry = np.zeros(3 if f.motion_model == "odometry" else 2)
         self._odometry_cov = np.zeros((self._odometry.size, self._odometry.size))
         self._newly_covered = self._mark_and_trail()
-        nees, rmse, _, self._worst_variance, seen = _step_metrics(
+        nees, rmse, _, self._worst_variance, seen = compiled.step_metrics(
             mean, cov, observed, self._world.pose_tuple, self._true_landmarks, readings.ids, self._last_seen,
             self._t, cfg.loop_gap,
         )  # fmt: skip
@@ -299,7 +242,7 @@ class EKFSLAMEnv(gym.Env):
         self._newly_covered = self._mark_and_trail()
         terms = self._rewards()
         reward = sum(terms.values(), 0.0)
-        nees, rmse, closures, self._worst_variance, seen = _step_metrics(
+        nees, rmse, closures, self._worst_variance, seen = compiled.step_metrics(
             mean, cov, observed, world.pose_tuple, self._true_landmarks, readings.ids, self._last_seen, self._t,
             self.config.loop_gap,
         )  # fmt: skip
@@ -404,7 +347,7 @@ class EKFSLAMEnv(gym.Env):
         """Update the coverage memory (and the trails when rendering); returns the cells newly covered."""
         mean = self._belief[0]
         sensor = self.config.sensor
-        new = mark_coverage(
+        new = compiled.mark_coverage(
             self._memory, mean, self._bounds, self.config.observation.memory_resolution, sensor.max_range,
             sensor.fov,
         )  # fmt: skip
@@ -417,7 +360,7 @@ class EKFSLAMEnv(gym.Env):
     def _observation(self):
         mean, cov, observed, pose_given_map = self._belief
         time_left = max(0.0, 1.0 - self._t / self._max_steps)
-        fill_observation(
+        compiled.fill_observation(
             self._obs, self._layout.offsets, self._constants, mean, cov, observed, self._log_det, pose_given_map,
             self._world.scan(), self._memory, self._bounds, time_left,
         )  # fmt: skip

@@ -1,0 +1,241 @@
+"""The env's compiled kernels: the observation (one call writes the whole flat vector), the coverage memory, and
+the per-step metrics. Compiled because the env is stepped millions of times and each numpy call costs
+microseconds; delivered through ``ekfslam_gym.compiled`` (ahead of time when installed, else numba's JIT).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..angles import compiled_wrap_angle as wrap_angle
+from ..filter.kernels import det3
+from .observation_codes import (
+    CLIP,
+    COARSE_EXTENT,
+    COARSE_SAMPLES,
+    COVERAGE,
+    COVERAGE_COARSE,
+    GLOBALS,
+    GRID_EXTENT,
+    LANDMARK_FEATURES,
+    LANDMARKS,
+    MAX_RANGE,
+    MEMORY_RESOLUTION,
+    POSE,
+    POSE_COV,
+    SCAN,
+    SCAN_MAX_RANGE,
+)
+
+
+@njit(cache=True)
+def _clip(value: float) -> float:
+    if value > CLIP:
+        return CLIP
+    if value < -CLIP:
+        return -CLIP
+    return value
+
+
+@njit(cache=True)
+def mark_coverage(memory, pose, bounds, resolution, max_range, fov):
+    """Set the memory cells whose centres lie within max_range and the field of view of ``pose``.
+
+    Walls are ignored: the belief holds none, so the memory records where the sensor pointed, not what it saw.
+    Only the footprint's bounding box is visited. Returns how many cells were newly marked.
+
+    A cell whose direction is plainly outside the field of view (its cosine with the heading below
+    cos(fov / 2) by far more than rounding) is passed over without the exact bearing: with the default
+    half-circle view, half of every footprint is behind the robot and would cost an arctangent each step.
+    """
+    rows, cols = memory.shape
+    half_fov = 0.5 * fov
+    heading_c, heading_s = math.cos(pose[2]), math.sin(pose[2])
+    cos_limit = math.cos(half_fov) - 1e-6
+    c0 = max(0, int((pose[0] - max_range - bounds[0]) / resolution))
+    c1 = min(cols - 1, int((pose[0] + max_range - bounds[0]) / resolution))
+    r0 = max(0, int((pose[1] - max_range - bounds[1]) / resolution))
+    r1 = min(rows - 1, int((pose[1] + max_range - bounds[1]) / resolution))
+    range2 = max_range * max_range
+    marked = 0
+    for row in range(r0, r1 + 1):
+        dy = bounds[1] + (row + 0.5) * resolution - pose[1]
+        for col in range(c0, c1 + 1):
+            if memory[row, col]:
+                continue
+            dx = bounds[0] + (col + 0.5) * resolution - pose[0]
+            distance2 = dx * dx + dy * dy
+            if distance2 > range2:
+                continue
+            if heading_c * dx + heading_s * dy < cos_limit * math.sqrt(distance2):
+                continue
+            bearing = (math.atan2(dy, dx) - pose[2] + math.pi) % (2.0 * math.pi) - math.pi
+            if abs(bearing) <= half_fov:
+                memory[row, col] = 1.0
+                marked += 1
+    return marked
+
+
+@njit(cache=True)
+def _window(out, o, memory, bounds, resolution, x, y, c, s, grid, extent, samples):
+    """Write a robot-centred grid x grid window of the coverage memory at out[o:], reaching ``extent`` m to
+    each side; each cell is the mean of samples x samples points in it. Returns the next offset.
+
+    Cell (row, col) sits at (forward, left) offsets in the robot frame: row 0 furthest to the left, column 0
+    furthest behind. Outside the world counts as looked at (there is nothing to find there).
+    """
+    rows, cols = memory.shape
+    cell = 2.0 * extent / grid
+    step = cell / samples
+    for row in range(grid):
+        for col in range(grid):
+            total = 0.0
+            for i in range(samples):
+                left = extent - row * cell - (i + 0.5) * step
+                for j in range(samples):
+                    forward = -extent + col * cell + (j + 0.5) * step
+                    wx = x + c * forward - s * left
+                    wy = y + s * forward + c * left
+                    mc = int(math.floor((wx - bounds[0]) / resolution))
+                    mr = int(math.floor((wy - bounds[1]) / resolution))
+                    if 0 <= mr < rows and 0 <= mc < cols:
+                        total += memory[mr, mc]
+                    else:
+                        total += 1.0
+            out[o + row * grid + col] = total / (samples * samples)
+    return o + grid * grid
+
+
+@njit(cache=True)
+def _window_side(offsets, part):
+    """Side of the square window stored as part ``part`` (0 when absent)."""
+    return int(math.sqrt(offsets[part + 1] - offsets[part]) + 0.5)
+
+
+@njit(cache=True)
+def fill_observation(
+    out, offsets, constants, mean, cov, observed, log_det, pose_given_map, scan, memory, bounds, time_left
+):
+    """Write the flat observation (see the module docstring) into ``out`` (float32).
+
+    ``offsets`` is ``ObservationLayout.offsets`` (where each part goes), ``constants`` is
+    ``observation_constants(...)``; ``bounds`` (xmin, ymin, xmax, ymax) of the world hold the memory.
+    ``log_det`` is log det Sigma and ``pose_given_map`` is P, so log det Sigma_mm = log det Sigma - log det P.
+    """
+    max_range = constants[MAX_RANGE]
+    resolution = constants[MEMORY_RESOLUTION]
+    centre_x = 0.5 * (bounds[0] + bounds[2])
+    centre_y = 0.5 * (bounds[1] + bounds[3])
+    half_size = 0.5 * max(bounds[2] - bounds[0], bounds[3] - bounds[1])
+    x, y, theta = mean[0], mean[1], mean[2]
+    c, s = math.cos(theta), math.sin(theta)
+    o = offsets[POSE]
+    out[o] = _clip((x - centre_x) / half_size)
+    out[o + 1] = _clip((y - centre_y) / half_size)
+    out[o + 2] = s
+    out[o + 3] = c
+    o = offsets[POSE_COV]
+    for i in range(3):
+        out[o + i] = _clip(math.log(max(cov[i, i], 1e-300)) / 10.0)
+
+    n = observed.shape[0]
+    distances = np.empty(n)
+    n_seen = 0
+    for j in range(n):
+        if observed[j]:
+            dx = mean[3 + 2 * j] - x
+            dy = mean[4 + 2 * j] - y
+            distances[j] = dx * dx + dy * dy
+            n_seen += 1
+        else:
+            distances[j] = np.inf
+    base = offsets[LANDMARKS]
+    k = (offsets[LANDMARKS + 1] - base) // LANDMARK_FEATURES
+    for slot in range(k):
+        o = base + LANDMARK_FEATURES * slot
+        if slot < n_seen:
+            j = np.argmin(distances)  # the nearest not yet placed: k passes instead of sorting all n
+            distances[j] = np.inf
+            dx = mean[3 + 2 * j] - x
+            dy = mean[4 + 2 * j] - y
+            lj = 3 + 2 * j
+            half_trace = 0.5 * (cov[lj, lj] + cov[lj + 1, lj + 1])
+            out[o] = 1.0
+            out[o + 1] = _clip((c * dx + s * dy) / max_range)
+            out[o + 2] = _clip((-s * dx + c * dy) / max_range)
+            out[o + 3] = _clip(math.log(max(half_trace, 1e-300)) / 10.0)
+        else:
+            for f in range(LANDMARK_FEATURES):
+                out[o + f] = 0.0
+
+    o = offsets[GLOBALS]
+    log_det_map = log_det - math.log(det3(pose_given_map)) if n else 0.0
+    out[o] = _clip(log_det_map / max(2 * n, 1) / 10.0)
+    out[o + 1] = n_seen / max(n, 1)
+    out[o + 2] = time_left
+    o = offsets[SCAN]
+    scan_max = constants[SCAN_MAX_RANGE]
+    for b in range(offsets[SCAN + 1] - o):
+        out[o + b] = min(scan[b] / scan_max, 1.0)
+    grid = _window_side(offsets, COVERAGE)
+    _window(out, offsets[COVERAGE], memory, bounds, resolution, x, y, c, s, grid, constants[GRID_EXTENT], 1)
+    coarse_grid = _window_side(offsets, COVERAGE_COARSE)
+    if coarse_grid > 0:
+        _window(
+            out, offsets[COVERAGE_COARSE], memory, bounds, resolution, x, y, c, s, coarse_grid,
+            constants[COARSE_EXTENT], COARSE_SAMPLES,
+        )  # fmt: skip
+
+
+@njit(cache=True)
+def step_metrics(mean, cov, observed, true_pose, true_landmarks, read_ids, last_seen, t, loop_gap):
+    """Pose NEES, map RMSE of seen landmarks, new loop closures, largest landmark marginal variance, and the
+    number of landmarks seen.
+
+    ``true_pose`` is (x, y, theta), theta unwrapped. Also stamps ``last_seen`` for the landmarks read at step
+    t. One compiled call instead of a dozen numpy ones.
+    """
+    e0 = true_pose[0] - mean[0]
+    e1 = true_pose[1] - mean[1]
+    e2 = wrap_angle(true_pose[2] - mean[2])
+    a, b, c = cov[0, 0], cov[0, 1], cov[0, 2]
+    d, e, f = cov[1, 1], cov[1, 2], cov[2, 2]
+    # e^T Sigma_xx^-1 e by cofactors of the symmetric 3x3 pose block.
+    c00 = d * f - e * e
+    c01 = c * e - b * f
+    c02 = b * e - c * d
+    c11 = a * f - c * c
+    c12 = b * c - a * e
+    c22 = a * d - b * b
+    det = a * c00 + b * c01 + c * c02
+    nees = (
+        c00 * e0 * e0 + c11 * e1 * e1 + c22 * e2 * e2 + 2.0 * (c01 * e0 * e1 + c02 * e0 * e2 + c12 * e1 * e2)
+    ) / det
+
+    n = observed.shape[0]
+    squared, seen = 0.0, 0
+    worst = 0.0
+    for j in range(n):
+        lj = 3 + 2 * j
+        if observed[j]:
+            dx = mean[lj] - true_landmarks[j, 0]
+            dy = mean[lj + 1] - true_landmarks[j, 1]
+            squared += dx * dx + dy * dy
+            seen += 1
+            p, q, r = cov[lj, lj], cov[lj, lj + 1], cov[lj + 1, lj + 1]
+            largest = 0.5 * (p + r) + math.sqrt(0.25 * (p - r) * (p - r) + q * q)
+            worst = max(worst, largest)
+        else:
+            worst = np.inf
+    rmse = math.sqrt(squared / seen) if seen else 0.0
+
+    closures = 0
+    for i in range(read_ids.shape[0]):
+        j = read_ids[i]
+        if last_seen[j] >= 0 and t - last_seen[j] >= loop_gap:
+            closures += 1
+        last_seen[j] = t
+    return nees, rmse, closures, worst, seen
