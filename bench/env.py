@@ -49,6 +49,8 @@ def breakdown(overrides: dict, steps: int) -> dict[str, float]:
     layout, constants = env.observation_layout, observation_constants(cfg.observation, cfg.sensor)
     out = np.zeros(layout.size, dtype=np.float32)
     memory, bounds = env.coverage_memory, env.bounds
+    # Read-only views of the filter's state, fetched once as the env does (the filter updates them in place).
+    mean, cov, observed, pose_given_map = ekf.mean, ekf.cov, ekf.observed, ekf.pose_cov_given_map
     timings = dict.fromkeys(["physics", "odometry", "sensing", "filter", "observation", "total step"], 0.0)
     clock = time.perf_counter
     for a in actions:
@@ -64,8 +66,8 @@ def breakdown(overrides: dict, steps: int) -> dict[str, float]:
         ekf.correct(readings.ids, readings.z)
         t4 = clock()
         fill_observation(
-            out, layout.offsets, constants, ekf.mean, ekf.cov, ekf.observed, ekf.log_det, ekf.pose_cov_given_map,
-            world.scan(), memory, bounds, 0.5,
+            out, layout.offsets, constants, mean, cov, observed, ekf.log_det, pose_given_map, world.scan(), memory,
+            bounds, 0.5,
         )  # fmt: skip
         out.copy()
         t5 = clock()

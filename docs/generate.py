@@ -14,6 +14,11 @@ from pathlib import Path
 PAGE = Path(__file__).resolve().parent / "environment.md"
 
 
+def _cell(text: str) -> str:
+    """Text for a markdown table cell: a bare | would end the cell."""
+    return text.replace("|", r"\|")
+
+
 def render() -> str:
     import gymnasium as gym
 
@@ -38,9 +43,9 @@ def render() -> str:
         "",
         "`ekfslam_gym.envs.rewards.REWARD_TERMS`, the list that makes the `reward` config section:",
         "",
-        "| term | default weight | the weight multiplies |",
+        "| term | default weight | meaning |",
         "|---|---|---|",
-        *(f"| `{term.name}` | {term.default} | {term.meaning} |" for term in REWARD_TERMS),
+        *(f"| `{term.name}` | {term.default} | {_cell(term.meaning)} |" for term in REWARD_TERMS),
         "",
         "## Default configuration",
         "",

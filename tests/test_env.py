@@ -529,6 +529,16 @@ def time_left(env, obs) -> float:
     return float(env.unwrapped.observation_layout.part(obs, "globals")[2])
 
 
+def time_limits(env) -> list[int]:
+    """The limits of the TimeLimit wrappers around the env, outermost first."""
+    limits = []
+    while isinstance(env, gym.Wrapper):
+        if isinstance(env, gym.wrappers.TimeLimit):
+            limits.append(env.spec.max_episode_steps)
+        env = env.env
+    return limits
+
+
 def run_to_truncation(env, steps):
     """Zero actions (no landmark becomes certain, nothing terminates): the time left and truncation flags."""
     obs, _ = env.reset(seed=0)
@@ -550,6 +560,7 @@ def test_registered_ids_carry_their_preset_step_limit(env_id):
                                                            "EKFSLAM-Large-v0": 1000}[env_id]  # fmt: skip
     env = gym.make(env_id)
     assert env.spec.max_episode_steps == env.unwrapped.config.max_episode_steps == limit
+    assert time_limits(env) == [limit]
 
 
 @pytest.mark.parametrize("form", ["make", "config"])
@@ -558,6 +569,7 @@ def test_a_given_step_limit_truncates_and_zeroes_the_time_left_at_that_step(form
     kwargs = {"max_episode_steps": limit} if form == "make" else {"config": {"max_episode_steps": limit}}
     env = gym.make("EKFSLAM-v0", **kwargs)
     assert env.spec.max_episode_steps == env.unwrapped.config.max_episode_steps == limit
+    assert time_limits(env) == [limit]  # one TimeLimit, not the registered one below a new one
     left, flags = run_to_truncation(env, limit + 5)
     assert flags == [False] * (limit - 1) + [True]
     assert left[-1] == 0.0 and left[-2] > 0.0 and left[0] == 1.0

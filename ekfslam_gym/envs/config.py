@@ -1,4 +1,5 @@
-"""One frozen, validated configuration per env, built once at construction and never mutated.
+"""One frozen, validated configuration per env, built at construction and never mutated (only
+``EKFSLAMEnv.set_max_episode_steps`` replaces it, by a copy with another step limit).
 
 Sections: ``world`` (layout and landmarks), ``robot``, ``sensor`` and ``odometry`` (the simulator's own
 parameter classes), ``filter``, ``reward``, ``observation``, and the episode settings at the top level. Build
@@ -158,7 +159,8 @@ class EnvConfig:
     """Everything an EKFSLAM env needs; see the section classes for units and meanings.
 
     dt: control period (s); substeps: physics steps per control step; max_episode_steps: the time limit
-    (truncation, and the horizon of the observation's time-left term); terminate_on_collision: end the episode
+    (truncation, and the horizon of the observation's time-left term; ``gym.make`` keeps its TimeLimit
+    equal to it, see ``ekfslam_gym.envs.horizon``); terminate_on_collision: end the episode
     at the first wall contact; done_std: end the episode when every landmark's marginal standard deviation
     (sqrt of the larger eigenvalue of its 2x2 covariance, m) is below this (0 disables); loop_gap: a re-observed
     landmark unseen for at least this many steps counts as a loop closure.

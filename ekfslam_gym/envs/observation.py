@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -57,9 +58,9 @@ class ObservationLayout:
     """Where each part of the flat observation lies: its one definition.
 
     Built from the ``observation`` config and the sensor's beam count (``from_config``). ``sizes`` and
-    ``slices`` name the parts present (``coverage_coarse`` only when ``coarse_grid`` > 0), in order;
-    ``offsets`` (int64, len(PARTS) + 1, read-only) gives part i of ``PARTS`` at ``offsets[i]:offsets[i + 1]``
-    (an empty span when absent), which is all the compiled kernel is told about the layout.
+    ``slices`` (read-only mappings) name the parts present, in order (``coverage_coarse`` only when
+    ``coarse_grid`` > 0); ``offsets`` (int64, len(PARTS) + 1, read-only) gives part i of ``PARTS`` at
+    ``offsets[i]:offsets[i + 1]`` (an empty span when absent), which is all the compiled kernel is told.
     """
 
     k_nearest: int
@@ -91,9 +92,13 @@ class ObservationLayout:
         slices = {
             name: slice(int(offsets[i]), int(offsets[i + 1])) for i, name in enumerate(PARTS) if every[i]
         }
-        object.__setattr__(self, "sizes", sizes)
-        object.__setattr__(self, "slices", slices)
+        object.__setattr__(self, "sizes", MappingProxyType(sizes))
+        object.__setattr__(self, "slices", MappingProxyType(slices))
         object.__setattr__(self, "offsets", offsets)
+
+    def __reduce__(self):
+        # Rebuilt from the four sizes: the read-only views are derived, and a mapping proxy does not pickle.
+        return type(self), (self.k_nearest, self.n_beams, self.grid, self.coarse_grid)
 
     @classmethod
     def from_config(cls, observation: ObservationConfig, sensor: SensorParams) -> ObservationLayout:
