@@ -22,8 +22,8 @@ import gymnasium as gym  # noqa: E402
 import numpy as np  # noqa: E402
 
 import ekfslam_gym  # noqa: E402, F401
+from ekfslam_gym import compiled  # noqa: E402
 from ekfslam_gym.envs import EKFSLAMEnv  # noqa: E402
-from ekfslam_gym.envs.kernels import fill_observation
 from ekfslam_gym.envs.observation import observation_constants  # noqa: E402
 
 
@@ -65,7 +65,7 @@ def breakdown(overrides: dict, steps: int) -> dict[str, float]:
         ekf.predict(odometry.u, control_cov=odometry.cov)
         ekf.correct(readings.ids, readings.z)
         t4 = clock()
-        fill_observation(
+        compiled.fill_observation(
             out, layout.offsets, constants, mean, cov, observed, ekf.log_det, pose_given_map, world.scan(), memory,
             bounds, 0.5,
         )  # fmt: skip

@@ -57,12 +57,12 @@ KERNELS: dict[str, tuple[str, str, str]] = {
     "odometry_reading": (
         "ekfslam_gym.sim.odometry_kernels",
         "odometry_reading",
-        f"Tuple(({_F8_1}, {_F8_2}, {_F8_1}))(f8, f8, f8, f8, f8, f8, {_F8_1}, {_F8_1})",
+        f"void(f8, f8, f8, f8, f8, f8, {_F8_1}, {_F8_1}, {_F8_1}, {_F8_2}, {_F8_1})",
     ),
     "velocity_reading": (
         "ekfslam_gym.sim.odometry_kernels",
         "velocity_reading",
-        f"Tuple(({_F8_1}, {_F8_2}, {_F8_1}))(f8, f8, f8, f8, f8, f8, f8, {_F8_1}, {_F8_1})",
+        f"void(f8, f8, f8, f8, f8, f8, f8, {_F8_1}, {_F8_1}, {_F8_1}, {_F8_2}, {_F8_1})",
     ),
     "mark_coverage": (
         "ekfslam_gym.envs.kernels",

@@ -119,8 +119,9 @@ def measure_odometry(
     The noise is independent per component, std * N(0, 1) (3 normals from ``rng``) with the std reported in
     M, so M is exact.
     """
-    u, cov, u_true = compiled.odometry_reading(*pose0, *pose1, noise.vector, rng.standard_normal(3))
-    return OdometryReading(u, cov, u_true)
+    reading = OdometryReading(np.empty(3), np.zeros((3, 3)), np.empty(3))
+    compiled.odometry_reading(*pose0, *pose1, noise.vector, rng.standard_normal(3), *reading)
+    return reading
 
 
 def measure_velocity(
@@ -132,8 +133,9 @@ def measure_velocity(
 ) -> VelocityReading:
     """Noisy (v, omega) of the motion pose0 -> pose1 over dt seconds, with its covariance diag(std^2)
     (2 normals from ``rng``)."""
-    u, cov, u_true = compiled.velocity_reading(*pose0, *pose1, dt, noise.vector, rng.standard_normal(2))
-    return VelocityReading(u, cov, u_true)
+    reading = VelocityReading(np.empty(2), np.zeros((2, 2)), np.empty(2))
+    compiled.velocity_reading(*pose0, *pose1, dt, noise.vector, rng.standard_normal(2), *reading)
+    return reading
 
 
 def __getattr__(name: str):

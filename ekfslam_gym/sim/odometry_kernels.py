@@ -67,17 +67,18 @@ def odometry_reading(
     theta1: float,
     alphas: np.ndarray,
     normals: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(u, M, u_true): the exact decomposition plus std * normals, and M = diag(std^2)."""
-    u_true = np.empty(3)
+    u: np.ndarray,
+    cov: np.ndarray,
+    u_true: np.ndarray,
+) -> None:
+    """Write u (the exact decomposition plus std * normals), M = diag(std^2) into ``cov`` (zeros off the
+    diagonal are the caller's) and the exact decomposition into ``u_true``: the caller allocates, because
+    arrays made inside a compiled function cost more to hand back to Python than the arithmetic."""
     u_true[0], u_true[1], u_true[2] = decompose_odometry(x0, y0, theta0, x1, y1, theta1)
     std = odometry_std(u_true[0], u_true[1], u_true[2], alphas)
-    u = np.empty(3)
-    cov = np.zeros((3, 3))
     for i in range(3):
         u[i] = u_true[i] + std[i] * normals[i]
         cov[i, i] = std[i] * std[i]
-    return u, cov, u_true
 
 
 @njit(cache=True)
@@ -124,14 +125,13 @@ def velocity_reading(
     dt: float,
     alphas: np.ndarray,
     normals: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(u, N, u_true) for the velocity form: the arc's (v, omega) plus std * normals, N = diag(std^2)."""
-    u_true = np.empty(2)
+    u: np.ndarray,
+    cov: np.ndarray,
+    u_true: np.ndarray,
+) -> None:
+    """The velocity form of ``odometry_reading``: the arc's (v, omega) plus std * normals, N = diag(std^2)."""
     u_true[0], u_true[1] = velocity_from_motion(x0, y0, theta0, x1, y1, theta1, dt)
     std = velocity_std(u_true[0], u_true[1], alphas)
-    u = np.empty(2)
-    cov = np.zeros((2, 2))
     for i in range(2):
         u[i] = u_true[i] + std[i] * normals[i]
         cov[i, i] = std[i] * std[i]
-    return u, cov, u_true
