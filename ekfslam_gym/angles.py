@@ -22,8 +22,9 @@ def wrap_angle(angle: float) -> float:
 
 
 def wrap_angles(angles) -> np.ndarray:
-    """Wrap an array of angles in radians to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - np.asarray(angles, dtype=float), TWO_PI)
+    """Wrap an array of angles in radians to (-pi, pi] (the same values as ``wrap_angle``, element-wise)."""
+    wrapped = np.pi - np.mod(np.pi - np.asarray(angles, dtype=float), TWO_PI)
+    return np.where(wrapped <= -np.pi, wrapped + TWO_PI, wrapped)
 
 
 def __getattr__(name: str):

@@ -24,7 +24,7 @@ def _course_file(name: str) -> Path:
     folder = freiburg_dir()
     if folder is None or not (folder / name).is_file():
         pytest.skip(
-            f"course data {name} not found: set EKFSLAM_DATA_DIR or put it in ../shared/data/freiburg"
+            f"course data {name} not found: set EKFSLAM_DATA_DIR to its folder (see tests/datapaths.py)"
         )
     return folder / name
 
@@ -95,18 +95,6 @@ SENSOR_CASES = {
 }
 
 
-@pytest.mark.parametrize("case", sorted(SENSOR_CASES))
-def test_malformed_sensor_data_names_file_and_line(tmp_path, case):
-    text, line, fragment = SENSOR_CASES[case]
-    path = tmp_path / "broken_sensor.dat"
-    path.write_text(text)
-    with pytest.raises(ValueError) as info:
-        read_sensor_data(path)
-    message = str(info.value)
-    assert f"broken_sensor.dat:{line}:" in message
-    assert fragment in message
-
-
 WORLD_CASES = {
     "token count": ("1 2 1\n2 0\n", 2, "needs 3 values"),
     "non-numeric": ("1 2 1\n2 0 y\n", 2, "y 'y'"),
@@ -115,15 +103,24 @@ WORLD_CASES = {
 }
 
 
-@pytest.mark.parametrize("case", sorted(WORLD_CASES))
-def test_malformed_world_names_file_and_line(tmp_path, case):
-    text, line, fragment = WORLD_CASES[case]
-    path = tmp_path / "broken_world.dat"
+MALFORMED = [(read_sensor_data, case, *SENSOR_CASES[case]) for case in sorted(SENSOR_CASES)] + [
+    (read_world, case, *WORLD_CASES[case]) for case in sorted(WORLD_CASES)
+]
+
+
+@pytest.mark.parametrize(
+    ("reader", "case", "text", "line", "fragment"),
+    MALFORMED,
+    ids=[f"{reader.__name__}: {case}" for reader, case, *_ in MALFORMED],
+)
+def test_malformed_files_name_file_and_line(tmp_path, reader, case, text, line, fragment):
+    path = tmp_path / "broken.dat"
     path.write_text(text)
     with pytest.raises(ValueError) as info:
-        read_world(path)
-    assert f"broken_world.dat:{line}:" in str(info.value)
-    assert fragment in str(info.value)
+        reader(path)
+    message = str(info.value)
+    assert f"broken.dat:{line}:" in message
+    assert fragment in message
 
 
 def test_blank_lines_and_empty_blocks(tmp_path):

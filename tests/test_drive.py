@@ -130,3 +130,17 @@ def test_drive_command_line(tmp_path, capsys):
 def test_impossible_layout_is_refused():
     with pytest.raises(ValueError, match="could not place"):
         simulate_drive(0, n_landmarks=60, min_separation=3.0)
+
+
+def test_drives_reproduce_their_recordings():
+    """Refactors change no drive: every array of the seeded drives recorded before ``ekfslam_gym/data/`` was
+    reorganised (``tests/golden/record_drives.py``). The decomposition is now the simulator's, whose sqrt may
+    differ from hypot in the last bit: held to 1e-12."""
+    from tests.golden.record_drives import GOLDEN, recordings
+
+    recorded = np.load(GOLDEN)
+    now = recordings()
+    assert set(now) == set(recorded.files)
+    for name, array in now.items():
+        assert array.dtype == recorded[name].dtype and array.shape == recorded[name].shape, name
+        np.testing.assert_allclose(array, recorded[name], rtol=1e-12, atol=1e-12, err_msg=name)

@@ -1,6 +1,8 @@
-"""The course's graph data sets (its least-squares SLAM exercise) through the MAT and g2o readers, and the g2o writer.
+"""The graph data sets of the Freiburg *Robot Mapping* course (C. Stachniss; its least-squares SLAM exercise)
+through the MAT and g2o readers, and the g2o writer.
 
-The data stays in ../shared/data/freiburg (or $EKFSLAM_DATA_DIR); these tests skip where it is absent.
+The data is never copied into the repository: ``tests/datapaths.py`` finds it ($EKFSLAM_DATA_DIR or its default
+folder); these tests skip where it is absent.
 """
 
 from __future__ import annotations
@@ -12,8 +14,8 @@ import numpy as np
 import pytest
 
 from ekfslam_gym.cli.graph import main as graph_cli
+from ekfslam_gym.cli.graph import read_graph
 from ekfslam_gym.data.g2o import read_g2o, write_g2o
-from ekfslam_gym.data.graph_files import read_graph
 from ekfslam_gym.data.matfile import read_mat_graph
 from ekfslam_gym.graph.optimizer import FactorGraph, Values, gauss_newton, levenberg_marquardt
 from tests.datapaths import freiburg_dir
@@ -24,8 +26,7 @@ def freiburg() -> Path:
     path = freiburg_dir()
     if path is None:
         pytest.skip(
-            "Freiburg course data not found: expected ../shared/data/freiburg beside the repository "
-            "or a folder in $EKFSLAM_DATA_DIR"
+            "Freiburg course data not found: set $EKFSLAM_DATA_DIR to its folder (see tests/datapaths.py)"
         )
     return path
 
@@ -37,7 +38,7 @@ def _data_file(freiburg: Path, name: str) -> Path:
     return path
 
 
-# (file, sheet's final error, reproduced initial error, GN iterations) from shared/data/freiburg/README.md.
+# (file, the course's final error, the initial error as we reproduce it, GN iterations).
 ANCHORS = [
     ("simulation-pose-pose.dat", 8269.0, 138_862_234.08, 9),
     ("intel.dat", 360.0, 1_795_138.99, 5),
@@ -56,7 +57,7 @@ def test_course_anchor(freiburg, name, final, initial, iterations):
     result = gauss_newton(problem.graph, problem.initial)
     assert result.converged
     assert result.initial_error == pytest.approx(initial, abs=0.01)
-    assert result.final_error == pytest.approx(final, rel=1e-3)  # the sheet's figures are rounded
+    assert result.final_error == pytest.approx(final, rel=1e-3)  # the course's figures are rounded
     assert result.iterations == iterations
     assert len(result.errors) == iterations + 1
 

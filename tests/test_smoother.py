@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ekfslam_gym.angles import wrap_angles
 from ekfslam_gym.data.synthetic import synthetic_drive
 from ekfslam_gym.graph import se2
 from ekfslam_gym.graph.smoother import dead_reckoning, odometry_edge_covariance, smooth_drive
@@ -71,14 +72,14 @@ def test_readings_at_the_initial_pose_unseen_landmarks_and_turning_on_the_spot()
     for a, b in zip(truth[:-1], truth[1:], strict=True):
         d = b[:2] - a[:2]
         t = np.hypot(*d)
-        r1 = se2.wrap_angle(np.arctan2(d[1], d[0]) - a[2]) if t > 0 else 0.0
-        controls.append([r1, t, se2.wrap_angle(b[2] - a[2] - r1)])
+        r1 = wrap_angles(np.arctan2(d[1], d[0]) - a[2]) if t > 0 else 0.0
+        controls.append([r1, t, wrap_angles(b[2] - a[2] - r1)])
 
     def read(pose, ids):
         rows = []
         for i in ids:
             d = landmarks[i] - pose[:2]
-            rows.append([i, np.hypot(*d), se2.wrap_angle(np.arctan2(d[1], d[0]) - pose[2])])
+            rows.append([i, np.hypot(*d), wrap_angles(np.arctan2(d[1], d[0]) - pose[2])])
         return np.array(rows)
 
     readings = [read(truth[0], [2]), read(truth[1], [0, 2]), [], read(truth[3], [0, 3])]

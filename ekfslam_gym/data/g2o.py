@@ -78,22 +78,20 @@ def read_g2o(path: str | os.PathLike[str]) -> GraphProblem:
         return table[vid]
 
     graph = FactorGraph()
-    if between:
-        i = [resolve(n, a, pose_index, "VERTEX_SE2") for n, a, _, _ in between]
-        j = [resolve(n, b, pose_index, "VERTEX_SE2") for n, _, b, _ in between]
-        numbers = np.array([v for *_, v in between])
-        info = np.zeros((len(between), 3, 3))
-        info[:, _UPPER3[0], _UPPER3[1]] = numbers[:, 3:]
-        info[:, _UPPER3[1], _UPPER3[0]] = numbers[:, 3:]
-        graph.add_between(i, j, numbers[:, :3], info)
-    if pose_landmark:
-        i = [resolve(n, a, pose_index, "VERTEX_SE2") for n, a, _, _ in pose_landmark]
-        j = [resolve(n, b, landmark_index, "VERTEX_XY") for n, _, b, _ in pose_landmark]
-        numbers = np.array([v for *_, v in pose_landmark])
-        info = np.zeros((len(pose_landmark), 2, 2))
-        info[:, _UPPER2[0], _UPPER2[1]] = numbers[:, 2:]
-        info[:, _UPPER2[1], _UPPER2[0]] = numbers[:, 2:]
-        graph.add_pose_landmark(i, j, numbers[:, :2], info)
+    for edges, second_index, second_tag, (rows, cols), add in (
+        (between, pose_index, "VERTEX_SE2", _UPPER3, graph.add_between),
+        (pose_landmark, landmark_index, "VERTEX_XY", _UPPER2, graph.add_pose_landmark),
+    ):
+        if not edges:
+            continue
+        m = int(rows.max()) + 1  # the measurement's size: the information matrix is m x m
+        i = [resolve(n, a, pose_index, "VERTEX_SE2") for n, a, _, _ in edges]
+        j = [resolve(n, b, second_index, second_tag) for n, _, b, _ in edges]
+        numbers = np.array([v for *_, v in edges])
+        info = np.zeros((len(edges), m, m))
+        info[:, rows, cols] = numbers[:, m:]
+        info[:, cols, rows] = numbers[:, m:]
+        add(i, j, numbers[:, :m], info)
     return GraphProblem(
         graph,
         Values(np.array(poses).reshape(-1, 3), np.array(landmarks).reshape(-1, 2)),
@@ -127,16 +125,13 @@ def write_g2o(
         lines.append(f"VERTEX_SE2 {vid} {x!r} {y!r} {th!r}")
     for vid, (x, y) in zip(landmark_ids.tolist(), values.landmarks.tolist()):
         lines.append(f"VERTEX_XY {vid} {x!r} {y!r}")
-    f = graph.between
-    upper = f.information[:, _UPPER3[0], _UPPER3[1]]
-    for a, b, z, w in zip(
-        pose_ids[f.first].tolist(), pose_ids[f.second].tolist(), f.measured.tolist(), upper.tolist()
+    for tag, f, second_ids, (rows, cols) in (
+        ("EDGE_SE2", graph.between, pose_ids, _UPPER3),
+        ("EDGE_SE2_XY", graph.pose_landmark, landmark_ids, _UPPER2),
     ):
-        lines.append(f"EDGE_SE2 {a} {b} " + " ".join(repr(v) for v in z + w))
-    f = graph.pose_landmark
-    upper = f.information[:, _UPPER2[0], _UPPER2[1]]
-    for a, b, z, w in zip(
-        pose_ids[f.first].tolist(), landmark_ids[f.second].tolist(), f.measured.tolist(), upper.tolist()
-    ):
-        lines.append(f"EDGE_SE2_XY {a} {b} " + " ".join(repr(v) for v in z + w))
+        upper = f.information[:, rows, cols]
+        for a, b, z, w in zip(
+            pose_ids[f.first].tolist(), second_ids[f.second].tolist(), f.measured.tolist(), upper.tolist()
+        ):
+            lines.append(f"{tag} {a} {b} " + " ".join(repr(v) for v in z + w))
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")

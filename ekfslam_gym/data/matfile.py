@@ -1,9 +1,9 @@
-"""The Freiburg Robot Mapping course's graph files (``.dat``: MATLAB 5 MAT files written by Octave).
+"""The graph files of the Freiburg *Robot Mapping* course (C. Stachniss), ``.dat``: MATLAB 5 MAT files written by
+Octave.
 
 Each file holds one struct ``g``: ``g.x`` (all states stacked: a pose is x y θ, a landmark x y), ``g.edges`` (type
 'P' or 'L', from, to, measurement, information, fromIdx, toIdx with 1-based start indices into ``g.x``) and
-``g.idLookup`` (one field per vertex id with its 0-based offset and dimension). See
-``shared/data/freiburg/README.md``.
+``g.idLookup`` (one field per vertex id with its 0-based offset and dimension).
 """
 
 from __future__ import annotations
@@ -56,8 +56,11 @@ def read_mat_graph(path: str | os.PathLike[str]) -> GraphProblem:
     landmarks = np.stack([x[o : o + 2] for o in offsets[~is_pose]]) if (~is_pose).any() else np.zeros((0, 2))
 
     edges = np.atleast_1d(g.edges)
-    P_first, P_second, P_z, P_info = [], [], [], []
-    L_first, L_second, L_z, L_info = [], [], [], []
+    # Per edge type: the table its second vertex is found in, the measurement's size, and the edges read
+    # (first index, second index, measurement, information).
+    second_at = {"P": pose_at, "L": landmark_at}
+    edge_dim = {"P": 3, "L": 2}
+    read: dict[str, list[tuple[int, int, np.ndarray, np.ndarray]]] = {"P": [], "L": []}
     for k, edge in enumerate(edges):
         try:
             kind = str(edge.type)
@@ -66,36 +69,21 @@ def read_mat_graph(path: str | os.PathLike[str]) -> GraphProblem:
             info = np.atleast_2d(np.asarray(edge.information, dtype=float))
         except AttributeError as exc:
             raise ValueError(f"{path}: edge {k + 1}: missing field ({exc})") from None
-        if kind == "P":
-            if (
-                from_offset not in pose_at
-                or to_offset not in pose_at
-                or z.shape != (3,)
-                or info.shape != (3, 3)
-            ):
-                raise ValueError(f"{path}: edge {k + 1} (type P) is malformed")
-            P_first.append(pose_at[from_offset])
-            P_second.append(pose_at[to_offset])
-            P_z.append(z)
-            P_info.append(info)
-        elif kind == "L":
-            if (
-                from_offset not in pose_at
-                or to_offset not in landmark_at
-                or z.shape != (2,)
-                or info.shape != (2, 2)
-            ):
-                raise ValueError(f"{path}: edge {k + 1} (type L) is malformed")
-            L_first.append(pose_at[from_offset])
-            L_second.append(landmark_at[to_offset])
-            L_z.append(z)
-            L_info.append(info)
-        else:
+        if kind not in read:
             raise ValueError(f"{path}: edge {k + 1} has unknown type {kind!r} (expected 'P' or 'L')")
+        m = edge_dim[kind]
+        if (
+            from_offset not in pose_at
+            or to_offset not in second_at[kind]
+            or z.shape != (m,)
+            or info.shape != (m, m)
+        ):
+            raise ValueError(f"{path}: edge {k + 1} (type {kind}) is malformed")
+        read[kind].append((pose_at[from_offset], second_at[kind][to_offset], z, info))
 
     graph = FactorGraph()
-    if P_first:
-        graph.add_between(P_first, P_second, np.array(P_z), np.array(P_info))
-    if L_first:
-        graph.add_pose_landmark(L_first, L_second, np.array(L_z), np.array(L_info))
+    for kind, add in (("P", graph.add_between), ("L", graph.add_pose_landmark)):
+        if read[kind]:
+            first, second, z, info = zip(*read[kind], strict=True)
+            add(list(first), list(second), np.array(z), np.array(info))
     return GraphProblem(graph, Values(poses, landmarks), vertex_ids[is_pose], vertex_ids[~is_pose])

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from .se2 import wrap_angle
+from ..angles import wrap_angles
 
 __all__ = [
     "FACTOR_KINDS",
@@ -46,7 +46,7 @@ def between_error(pose_i: Array, pose_j: Array, measured: Array) -> Array:
     u = ci * dx + si * dy - measured[0]
     v = -si * dx + ci * dy - measured[1]
     cz, sz = np.cos(measured[2]), np.sin(measured[2])
-    return np.stack([cz * u + sz * v, -sz * u + cz * v, wrap_angle(pose_j[2] - pose_i[2] - measured[2])])
+    return np.stack([cz * u + sz * v, -sz * u + cz * v, wrap_angles(pose_j[2] - pose_i[2] - measured[2])])
 
 
 def between_linearize(pose_i: Array, pose_j: Array, measured: Array) -> tuple[Array, Array]:
@@ -67,7 +67,7 @@ def between_linearize(pose_i: Array, pose_j: Array, measured: Array) -> tuple[Ar
     e = np.empty((3, E))
     e[0] = cz * u + sz * v
     e[1] = -sz * u + cz * v
-    e[2] = wrap_angle(pose_j[2] - pose_i[2] - measured[2])
+    e[2] = wrap_angles(pose_j[2] - pose_i[2] - measured[2])
     J = np.zeros((3, 6, E))
     J[0, 0], J[0, 1], J[0, 2] = -c, -s, cz * v0 - sz * u0
     J[1, 0], J[1, 1], J[1, 2] = s, -c, -sz * v0 - cz * u0
@@ -101,7 +101,7 @@ def pose_landmark_linearize(pose: Array, landmark: Array, measured: Array) -> tu
 def range_bearing(pose: Array, landmark: Array) -> Array:
     """Predicted reading (range [m], bearing [rad] in (−π, π]) of landmarks seen from poses, shape (2, E)."""
     dx, dy = landmark[0] - pose[0], landmark[1] - pose[1]
-    return np.stack([np.hypot(dx, dy), wrap_angle(np.arctan2(dy, dx) - pose[2])])
+    return np.stack([np.hypot(dx, dy), wrap_angles(np.arctan2(dy, dx) - pose[2])])
 
 
 def landmark_from_range_bearing(pose: Array, reading: Array) -> Array:
@@ -113,7 +113,7 @@ def landmark_from_range_bearing(pose: Array, reading: Array) -> Array:
 def range_bearing_error(pose: Array, landmark: Array, measured: Array) -> Array:
     """Range-bearing error (r̂ − r, wrap(φ̂ − φ)), shape (2, E)."""
     dx, dy = landmark[0] - pose[0], landmark[1] - pose[1]
-    return np.stack([np.hypot(dx, dy) - measured[0], wrap_angle(np.arctan2(dy, dx) - pose[2] - measured[1])])
+    return np.stack([np.hypot(dx, dy) - measured[0], wrap_angles(np.arctan2(dy, dx) - pose[2] - measured[1])])
 
 
 def range_bearing_linearize(pose: Array, landmark: Array, measured: Array) -> tuple[Array, Array]:
@@ -125,7 +125,7 @@ def range_bearing_linearize(pose: Array, landmark: Array, measured: Array) -> tu
     dx, dy = landmark[0] - pose[0], landmark[1] - pose[1]
     q = np.maximum(dx * dx + dy * dy, _MIN_RANGE**2)
     r = np.sqrt(q)
-    e = np.stack([r - measured[0], wrap_angle(np.arctan2(dy, dx) - pose[2] - measured[1])])
+    e = np.stack([r - measured[0], wrap_angles(np.arctan2(dy, dx) - pose[2] - measured[1])])
     ar, br = dx / r, dy / r
     aq, bq = dx / q, dy / q
     J = np.empty((2, 5, pose.shape[1]))
@@ -138,7 +138,7 @@ def prior_error(pose: Array, measured: Array) -> Array:
     """Pose prior error t2v(Z⁻¹ X), shape (3, E): the pose-pose error with X_i the origin."""
     cz, sz = np.cos(measured[2]), np.sin(measured[2])
     dx, dy = pose[0] - measured[0], pose[1] - measured[1]
-    return np.stack([cz * dx + sz * dy, -sz * dx + cz * dy, wrap_angle(pose[2] - measured[2])])
+    return np.stack([cz * dx + sz * dy, -sz * dx + cz * dy, wrap_angles(pose[2] - measured[2])])
 
 
 def prior_linearize(pose: Array, measured: Array) -> tuple[Array, Array]:

@@ -14,8 +14,8 @@ from typing import NamedTuple, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from ..angles import wrap_angles
 from .factors import FACTOR_KINDS, FactorKind
-from .se2 import wrap_angle
 from .sparse_solve import SparsePattern
 
 __all__ = ["NormalEquations"]
@@ -240,5 +240,5 @@ class NormalEquations:
     def retract(self, x: Array, dx: Array) -> Array:
         """x ⊞ Δx: add, then wrap the pose headings to (−π, π] (the errors are invariant to the wrap)."""
         out = x + dx
-        out[2 : 3 * self.num_poses : 3] = wrap_angle(out[2 : 3 * self.num_poses : 3])
+        out[2 : 3 * self.num_poses : 3] = wrap_angles(out[2 : 3 * self.num_poses : 3])
         return out

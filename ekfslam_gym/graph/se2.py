@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..angles import wrap_angles as wrap_angle  # vectorised here: every function takes stacks of poses
+from ..angles import wrap_angles
 
 __all__ = [
     "between",
@@ -18,7 +18,6 @@ __all__ = [
     "odometry_to_relative",
     "t2v",
     "v2t",
-    "wrap_angle",
 ]
 
 
@@ -47,7 +46,7 @@ def compose(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
         [
             a[..., 0] + c * b[..., 0] - s * b[..., 1],
             a[..., 1] + s * b[..., 0] + c * b[..., 1],
-            wrap_angle(a[..., 2] + b[..., 2]),
+            wrap_angles(a[..., 2] + b[..., 2]),
         ],
         axis=-1,
     )
@@ -58,7 +57,7 @@ def inverse(a: ArrayLike) -> NDArray[np.float64]:
     a = np.asarray(a, dtype=float)
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
     return np.stack(
-        [-c * a[..., 0] - s * a[..., 1], s * a[..., 0] - c * a[..., 1], wrap_angle(-a[..., 2])], axis=-1
+        [-c * a[..., 0] - s * a[..., 1], s * a[..., 0] - c * a[..., 1], wrap_angles(-a[..., 2])], axis=-1
     )
 
 
@@ -67,7 +66,7 @@ def between(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
     dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
-    return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap_angle(b[..., 2] - a[..., 2])], axis=-1)
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap_angles(b[..., 2] - a[..., 2])], axis=-1)
 
 
 def odometry_to_relative(odometry: ArrayLike) -> NDArray[np.float64]:
@@ -77,7 +76,7 @@ def odometry_to_relative(odometry: ArrayLike) -> NDArray[np.float64]:
     """
     u = np.asarray(odometry, dtype=float)
     r1, t, r2 = u[..., 0], u[..., 1], u[..., 2]
-    return np.stack([t * np.cos(r1), t * np.sin(r1), wrap_angle(r1 + r2)], axis=-1)
+    return np.stack([t * np.cos(r1), t * np.sin(r1), wrap_angles(r1 + r2)], axis=-1)
 
 
 def odometry_jacobian(odometry: ArrayLike) -> NDArray[np.float64]:

@@ -12,9 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..angles import wrap_angles
 from .factors import landmark_from_range_bearing
 from .optimizer import FactorGraph, OptimizationResult, Values, optimize
-from .se2 import compose, odometry_jacobian, odometry_to_relative, wrap_angle
+from .se2 import compose, odometry_jacobian, odometry_to_relative
 
 __all__ = [
     "DriveGraph",
@@ -52,7 +53,7 @@ def dead_reckoning(initial_pose: ArrayLike, odometry: ArrayLike) -> Array:
     relative = odometry_to_relative(np.asarray(odometry, dtype=float).reshape(-1, 3))
     poses = np.empty((len(relative) + 1, 3))
     poses[0] = np.asarray(initial_pose, dtype=float)
-    poses[0, 2] = wrap_angle(poses[0, 2])
+    poses[0, 2] = wrap_angles(poses[0, 2])
     for t, step in enumerate(relative):  # sequential by nature: each pose depends on the previous
         poses[t + 1] = compose(poses[t], step)
     return poses
