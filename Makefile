@@ -44,8 +44,10 @@ test-fast: install
 	$(BIN)/python -m pytest -m "not slow"
 
 bench: install  # bench/graph.py compares with GTSAM when the bench extra is installed (EXTRAS=...,bench)
+	$(BIN)/python bench/startup.py
 	$(BIN)/python bench/ekf.py
 	$(BIN)/python bench/env.py
+	$(BIN)/python bench/sim.py
 	$(BIN)/python bench/train.py
 	$(BIN)/python bench/graph.py
 

@@ -147,7 +147,10 @@ def main(argv=None) -> None:
     )
     parser.add_argument("--sizes", type=int, nargs="+", default=[10, 50, 100, 200, 400, 500])
     parser.add_argument("--budget", type=float, default=0.5, help="seconds of timing per measurement")
+    parser.add_argument("--smoke", action="store_true", help="tiny sizes: a check that the script runs")
     args = parser.parse_args(argv)
+    if args.smoke:
+        args.sizes, args.budget = [10, 50], 0.01
     rng = np.random.default_rng(0)
     rows = [measure(n, rng, args.budget) for n in args.sizes]
 

@@ -91,7 +91,10 @@ def main(argv=None) -> None:
     )
     parser.add_argument("--steps", type=int, default=20_000)
     parser.add_argument("--landmarks", type=int, nargs="+", default=[10, 50, 200])
+    parser.add_argument("--smoke", action="store_true", help="tiny sizes: a check that the script runs")
     args = parser.parse_args(argv)
+    if args.smoke:
+        args.steps, args.landmarks = 300, [10]
     rng = np.random.default_rng(0)
     actions = rng.uniform(-1, 1, (args.steps, 2)).astype(np.float32)
 

@@ -279,8 +279,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--data", type=Path, default=Path(os.environ.get("EKFSLAM_DATA_DIR", DEFAULT_DATA)))
     parser.add_argument("--poses", type=int, default=1000)
     parser.add_argument("--landmarks", type=int, default=100)
+    parser.add_argument("--smoke", action="store_true", help="tiny sizes: a check that the script runs")
     args = parser.parse_args(argv)
     data = args.data / "freiburg" if (args.data / "freiburg").is_dir() else args.data
+    if args.smoke:  # the synthetic graph only, small
+        args.repeats, args.poses, args.landmarks, data = 1, 60, 10, Path(os.devnull)
     if gtsam is None:
         print("GTSAM is not installed (pip install gtsam, the `bench` extra): timing ours alone.")
 

@@ -79,12 +79,16 @@ def pymunk_queries(layout_name: str, n_landmarks: int, n_calls: int) -> tuple[fl
     return 1e6 * (t1 - t0) / n_calls, 1e6 * (t2 - t1) / n_calls, len(near)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--landmarks", type=int, default=30)
     parser.add_argument("--steps", type=int, default=20000)
     parser.add_argument("--size", type=float, default=20.0, help="world width and height, m")
-    args = parser.parse_args()
+    parser.add_argument("--smoke", action="store_true", help="tiny sizes: a check that the script runs")
+    args = parser.parse_args(argv)
+    queries = 2000
+    if args.smoke:
+        args.steps, queries = 200, 50
     drive("arena", args.landmarks, 200)  # compile / load the numba cache outside the timing
     print(
         f"{args.landmarks} landmarks, {args.size:g} x {args.size:g} m, {args.steps} steps per layout, µs per call"
@@ -100,7 +104,7 @@ def main() -> None:
         )
     print("* step = physics + odometry + sense + scan (one motion model)")
     for name in ("arena", "rooms"):
-        occ, scan, n_near = pymunk_queries(name, args.landmarks, 2000)
+        occ, scan, n_near = pymunk_queries(name, args.landmarks, queries)
         print(
             f"pymunk segment_query_first ({name}): {n_near} occlusion queries {occ:.2f} us, 16 beams {scan:.2f} us"
         )

@@ -14,6 +14,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
+import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -46,11 +47,24 @@ def main(argv=None) -> None:
     )
     parser.add_argument("--steps", type=int, default=16_384)
     parser.add_argument("--n-envs", type=int, nargs="+", default=[1, 2, 8])
+    parser.add_argument("--smoke", action="store_true", help="tiny sizes: a check that the script runs")
     args = parser.parse_args(argv)
+    sys.path.insert(0, str(ROOT))
+    from train import schedule  # rl-zoo3's "lin_X" schedules, as train.py reads them
+
     entry = yaml.safe_load((ROOT / "configs" / "ppo.yaml").read_text())["EKFSLAM-v0"]
     keys = ("n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "learning_rate", "ent_coef", "clip_range",
             "policy_kwargs")  # fmt: skip
-    base = {k: entry[k] for k in keys if k in entry}
+    base = {
+        k: schedule(entry[k]) if k in ("learning_rate", "clip_range") else entry[k]
+        for k in keys
+        if k in entry
+    }
+    if args.smoke:
+        args.steps, args.n_envs = 128, [2]
+        base.update(n_epochs=1, batch_size=64)
+        entry = {**entry, "n_envs": 2, "n_steps": 32}
+        base["n_steps"] = 32
     rollout = base["n_steps"] * entry["n_envs"]
     print(f"PPO on EKFSLAM-v0, {args.steps} steps per setting, rollouts of {rollout} steps, torch 1 thread")
     for n_envs in args.n_envs:
