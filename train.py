@@ -3,10 +3,13 @@
     python train.py --config configs/ppo.yaml [--env-id ID] [--timesteps N] [--seed S] [--n-envs K]
                     [--out DIR] [--resume DIR] [--hyperparams KEY=VALUE ...] [--no-progress]
 
-The config is keyed by env id; each entry holds the PPO hyperparameters plus ``n_timesteps``, ``n_envs``,
-``vec_env`` (dummy | subproc), ``normalize`` (VecNormalize: false, true, or its keyword arguments),
-``env_kwargs``, ``eval_freq``/``eval_episodes``/``eval_seed`` (model selection on evaluation seeds, never the
-held-out suite) and ``checkpoint_freq`` (total env steps). The output folder receives:
+The config is rl-zoo3's own format, so ``python -m rl_zoo3.train -conf`` reads the same file: one entry per env
+id with the PPO hyperparameters plus ``n_timesteps``, ``n_envs``, ``normalize`` (VecNormalize: false, true, or
+its keyword arguments) and ``env_kwargs``. The settings only this script knows sit in a top-level
+``train_settings`` section, keyed by env id, where rl-zoo3 does not look: ``vec_env`` (dummy | subproc),
+``eval_freq``/``eval_episodes``/``eval_seed`` (model selection on evaluation seeds, never the held-out suite),
+``checkpoint_freq`` (total env steps) and ``torch_threads``. ``--hyperparams`` overrides either kind. The output
+folder receives:
 
 - ``model.zip`` + ``model_vecnormalize.pkl``: the final policy and its normalisation statistics;
 - ``best_model.zip`` + ``best_model_vecnormalize.pkl``: the best on the evaluation seeds;
@@ -41,15 +44,30 @@ TRAIN_KEYS = {
     "n_timesteps", "policy", "n_envs", "vec_env", "normalize", "env_kwargs", "eval_freq", "eval_episodes",
     "eval_seed", "checkpoint_freq", "torch_threads",
 }  # fmt: skip
+SETTINGS_SECTION = "train_settings"
+SETTINGS_KEYS = {"vec_env", "eval_freq", "eval_episodes", "eval_seed", "checkpoint_freq", "torch_threads"}
 
 
 # ---------------------------------------------------------------------------------------------- config
 def load_entry(config_path: Path, env_id: str) -> dict[str, Any]:
     """The config entry for ``env_id``, with every training key defaulted and checked."""
     data = yaml.safe_load(Path(config_path).read_text()) or {}
+    settings = data.pop(SETTINGS_SECTION, None) or {}
     if env_id not in data:
         raise SystemExit(f"{config_path} has no entry for {env_id!r}; it has {sorted(data)}")
     entry = dict(data[env_id])
+    misplaced = sorted(SETTINGS_KEYS & set(entry))
+    if misplaced:
+        raise SystemExit(
+            f"{config_path}: {misplaced} in the {env_id!r} entry would reach PPO under rl-zoo3; "
+            f"put them under '{SETTINGS_SECTION}: {{{env_id}: ...}}'"
+        )
+    extra = dict(settings.get(env_id) or {})
+    unknown = sorted(set(extra) - SETTINGS_KEYS)
+    if unknown:
+        raise SystemExit(f"{config_path}: unknown {SETTINGS_SECTION} keys {unknown} for {env_id!r}; "
+                         f"known: {sorted(SETTINGS_KEYS)}")
+    entry.update(extra)
     entry.setdefault("n_timesteps", 100_000)
     entry.setdefault("policy", "MlpPolicy")
     entry.setdefault("n_envs", 1)
