@@ -65,8 +65,10 @@ def load_entry(config_path: Path, env_id: str) -> dict[str, Any]:
     extra = dict(settings.get(env_id) or {})
     unknown = sorted(set(extra) - SETTINGS_KEYS)
     if unknown:
-        raise SystemExit(f"{config_path}: unknown {SETTINGS_SECTION} keys {unknown} for {env_id!r}; "
-                         f"known: {sorted(SETTINGS_KEYS)}")
+        raise SystemExit(
+            f"{config_path}: unknown {SETTINGS_SECTION} keys {unknown} for {env_id!r}; "
+            f"known: {sorted(SETTINGS_KEYS)}"
+        )
     entry.update(extra)
     entry.setdefault("n_timesteps", 100_000)
     entry.setdefault("policy", "MlpPolicy")
