@@ -88,6 +88,24 @@ def test_pickle_round_trip_mid_drive_continues_identically(copier) -> None:
         assert np.array_equal(world.scan(), twin.scan())
 
 
+def test_direct_chipmunk_calls_match_pymunks_python_api_exactly() -> None:
+    """The robot drives through Chipmunk's functions directly (speed); pymunk's Python API must agree bit for
+    bit, through wall contacts included."""
+    fast, slow = (World(make_layout("rooms", np.random.default_rng(4), 30)) for _ in range(2))
+    assert fast.robot._chipmunk is not None, "this pymunk no longer exposes Chipmunk's functions"
+    slow.robot._chipmunk = None
+    rng = np.random.default_rng(4)
+    contacts = 0
+    for k in range(600):
+        if k % 10 == 0:
+            command = rng.uniform((-1.0, -2.0), (1.0, 2.0))
+        hit = fast.step(*command)
+        assert hit == slow.step(*command)
+        assert fast.pose_tuple == slow.pose_tuple, k
+        contacts += hit
+    assert contacts > 0  # the drive exercised the contact solver
+
+
 def test_collision_is_reported_when_driving_into_a_wall() -> None:
     world = World(_layout(BOX, [], (5.0, 5.0, 0.0)))
     flags = [world.step(1.0, 0.0) for _ in range(60)]

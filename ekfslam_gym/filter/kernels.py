@@ -184,7 +184,8 @@ def _update(mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track)
     """One EKF correction with the given readings of already-initialised landmarks.
 
     Sigma <- Sigma - W W^T with W = (Sigma H^T) L^-T, S = L L^T: algebraically the course's (I - K H) Sigma,
-    exactly symmetric (each entry sums the same products in the same order) and O(m N^2).
+    exactly symmetric (each entry sums the same products in the same order) and O(m N^2). Every loop over N
+    runs along contiguous rows (H Sigma, W^T and Sigma's rows), which the compiler vectorises.
     Returns (change of log det Sigma, status).
     """
     m = slots.shape[0]
@@ -196,7 +197,9 @@ def _update(mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track)
     Hm = np.empty((m, 2, 2))
     cols = np.empty(m, np.int64)
     innovation = np.empty(k)
-    PHt = np.empty((n, k))
+    # H Sigma (k x n), row by row: Sigma is exactly symmetric, so its pose and landmark rows serve as the
+    # columns Sigma H^T needs, read contiguously.
+    HS = np.empty((k, n))
     for a in range(m):
         lj = 3 + 2 * slots[a]
         cols[a] = lj
@@ -205,16 +208,20 @@ def _update(mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track)
         Hm[a] = hm
         innovation[2 * a] = readings[a, 0] - zhat[0]
         innovation[2 * a + 1] = wrap_angle(readings[a, 1] - zhat[1])
-        for row in range(n):
-            c0 = cov[row, 0]
-            c1 = cov[row, 1]
-            c2 = cov[row, 2]
-            cl0 = cov[row, lj]
-            cl1 = cov[row, lj + 1]
-            for r in range(2):
-                PHt[row, 2 * a + r] = (
-                    c0 * hx[r, 0] + c1 * hx[r, 1] + c2 * hx[r, 2] + cl0 * hm[r, 0] + cl1 * hm[r, 1]
-                )
+        s0 = cov[0]
+        s1 = cov[1]
+        s2 = cov[2]
+        l0 = cov[lj]
+        l1 = cov[lj + 1]
+        for r in range(2):
+            out = HS[2 * a + r]
+            h0 = hx[r, 0]
+            h1 = hx[r, 1]
+            h2 = hx[r, 2]
+            g0 = hm[r, 0]
+            g1 = hm[r, 1]
+            for col in range(n):
+                out[col] = s0[col] * h0 + s1[col] * h1 + s2[col] * h2 + l0[col] * g0 + l1[col] * g1
 
     S = np.empty((k, k))
     for a in range(m):
@@ -222,11 +229,11 @@ def _update(mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track)
         for r in range(2):
             for c in range(k):
                 S[2 * a + r, c] = (
-                    Hx[a, r, 0] * PHt[0, c]
-                    + Hx[a, r, 1] * PHt[1, c]
-                    + Hx[a, r, 2] * PHt[2, c]
-                    + Hm[a, r, 0] * PHt[lj, c]
-                    + Hm[a, r, 1] * PHt[lj + 1, c]
+                    Hx[a, r, 0] * HS[c, 0]
+                    + Hx[a, r, 1] * HS[c, 1]
+                    + Hx[a, r, 2] * HS[c, 2]
+                    + Hm[a, r, 0] * HS[c, lj]
+                    + Hm[a, r, 1] * HS[c, lj + 1]
                 )
     for i in range(k):
         for j in range(i + 1, k):
@@ -241,14 +248,18 @@ def _update(mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track)
         return 0.0, NOT_PD
     L = S
 
-    # W^T = L^-1 (Sigma H^T)^T, stored transposed (k x n) so the rank-k update runs along contiguous rows.
-    Wt = np.empty((k, n))
-    for row in range(n):
-        for i in range(k):
-            v = PHt[row, i]
-            for p in range(i):
-                v -= L[i, p] * Wt[p, row]
-            Wt[i, row] = v / L[i, i]
+    # W^T = L^-1 H Sigma (k x n), a forward substitution along whole contiguous rows.
+    Wt = HS
+    for i in range(k):
+        wi = Wt[i]
+        for p in range(i):
+            lip = L[i, p]
+            wp = Wt[p]
+            for col in range(n):
+                wi[col] -= lip * wp[col]
+        lii = L[i, i]
+        for col in range(n):
+            wi[col] /= lii
     y = np.empty(k)
     for i in range(k):
         v = innovation[i]
@@ -262,11 +273,30 @@ def _update(mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track)
             v += Wt[i, row] * y[i]
         mean[row] += v
     mean[2] = wrap_angle(mean[2])
+    # Four (then two) rows of W^T per sweep of Sigma's row: the same products subtracted in the same order as
+    # one at a time (so Sigma stays exactly symmetric), with a quarter of the loads and stores.
     for row in range(n):
-        for i in range(k):
-            w = Wt[i, row]
+        r = cov[row]
+        i = 0
+        while i + 4 <= k:
+            w0 = Wt[i, row]
+            w1 = Wt[i + 1, row]
+            w2 = Wt[i + 2, row]
+            w3 = Wt[i + 3, row]
+            a0 = Wt[i]
+            a1 = Wt[i + 1]
+            a2 = Wt[i + 2]
+            a3 = Wt[i + 3]
             for col in range(n):
-                cov[row, col] -= w * Wt[i, col]
+                r[col] = (((r[col] - w0 * a0[col]) - w1 * a1[col]) - w2 * a2[col]) - w3 * a3[col]
+            i += 4
+        if i < k:
+            w0 = Wt[i, row]
+            w1 = Wt[i + 1, row]
+            a0 = Wt[i]
+            a1 = Wt[i + 1]
+            for col in range(n):
+                r[col] = (r[col] - w0 * a0[col]) - w1 * a1[col]
 
     if not track:
         return 0.0, OK
