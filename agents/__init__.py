@@ -2,7 +2,8 @@
 
 Baselines: ``random`` (uniform actions), ``circle`` (a fixed circle, a sanity floor), ``lawnmower`` (a
 coverage sweep of the world's bounds), ``greedy`` (D-optimal information gain over motion primitives, the
-classic active-SLAM baseline), and ``ppo`` (a saved stable-baselines3 policy; needs the ``train`` extra).
+classic active-SLAM baseline), ``frontier`` (nearest-frontier exploration, Yamauchi 1997, the exploration
+literature's baseline), and ``ppo`` (a saved stable-baselines3 policy; needs the ``train`` extra).
 ``make_agent(name, **kwargs)`` builds one by name, as ``python -m ekfslam_gym.evaluate --agent NAME`` does.
 """
 
@@ -12,6 +13,7 @@ from typing import Any
 
 from .base import Agent, clip_action, wall_scan
 from .baselines import CircleAgent, LawnmowerAgent, RandomAgent
+from .frontier import FrontierAgent
 from .greedy import GreedyInfoGainAgent
 from .ppo import PPOAgent
 
@@ -20,9 +22,10 @@ AGENTS: dict[str, type[Agent]] = {
     "circle": CircleAgent,
     "lawnmower": LawnmowerAgent,
     "greedy": GreedyInfoGainAgent,
+    "frontier": FrontierAgent,
     "ppo": PPOAgent,
 }
-BASELINES: tuple[str, ...] = ("random", "circle", "lawnmower", "greedy")
+BASELINES: tuple[str, ...] = ("random", "circle", "lawnmower", "greedy", "frontier")
 
 
 def make_agent(name: str, **kwargs: Any) -> Agent:
@@ -39,6 +42,7 @@ __all__ = [
     "BASELINES",
     "Agent",
     "CircleAgent",
+    "FrontierAgent",
     "GreedyInfoGainAgent",
     "LawnmowerAgent",
     "PPOAgent",

@@ -1,0 +1,208 @@
+"""The nearest-frontier agent: its frontier detection, path search and wall memory on hand-made grids, and its
+behaviour in seeded episodes (deterministic, valid actions, sees most landmarks, never reads the truth)."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import ekfslam_gym  # noqa: F401  (registers the env ids)
+from agents import AGENTS, BASELINES, FrontierAgent, make_agent
+from agents.frontier import (
+    coverage_and_bounds,
+    frontier_cells,
+    frontier_regions,
+    grid_paths,
+    path_sources,
+    update_walls,
+)
+from ekfslam_gym.envs import EKFSLAMEnv
+
+
+def test_frontier_cells_of_a_hand_made_memory():
+    memory = np.zeros((5, 6))
+    memory[1:3, 1:4] = 1.0  # a looked-at block of 2 x 3 cells
+    blocked = np.zeros((5, 6), dtype=bool)
+    blocked[3, 2] = True  # a wall cell just below the block: never a frontier
+    expected = np.zeros((5, 6), dtype=bool)
+    expected[0, 1:4] = True  # above
+    expected[3, [1, 3]] = True  # below, less the wall
+    expected[1:3, 0] = True  # left
+    expected[1:3, 4] = True  # right (corners touch diagonally only: not frontiers)
+    assert np.array_equal(frontier_cells(memory, blocked), expected)
+    assert not frontier_cells(np.zeros((4, 4)), np.zeros((4, 4), dtype=bool)).any()
+    assert not frontier_cells(np.ones((4, 4)), np.zeros((4, 4), dtype=bool)).any()
+
+
+def test_frontier_regions_drop_small_ones():
+    frontier = np.zeros((6, 8), dtype=bool)
+    frontier[0, 0:4] = True  # 4 cells in a row
+    frontier[3, 2] = frontier[4, 3] = True  # 2 cells joined diagonally
+    frontier[5, 7] = True  # a single cell
+    assert np.array_equal(frontier_regions(frontier, 1), frontier)
+    kept = frontier_regions(frontier, 2)
+    assert kept[3, 2] and kept[4, 3] and kept[0, 0] and not kept[5, 7]
+    only_large = frontier_regions(frontier, 3)
+    assert np.array_equal(np.argwhere(only_large), [[0, 0], [0, 1], [0, 2], [0, 3]])
+    assert not frontier_regions(np.zeros((3, 3), dtype=bool), 1).any()
+
+
+def _source(shape, row, col):
+    cost = np.full(shape, np.inf)
+    cost[row, col] = 0.0
+    return cost
+
+
+def test_grid_paths_go_around_walls_and_not_through_corners():
+    blocked = np.zeros((5, 5), dtype=bool)
+    dist, parent = grid_paths(blocked, _source((5, 5), 0, 0), 0.5)
+    assert dist[0, 4] == pytest.approx(2.0) and dist[4, 4] == pytest.approx(4 * 0.5 * math.sqrt(2))
+    assert dist[2, 4] == pytest.approx(2 * 0.5 * math.sqrt(2) + 2 * 0.5)
+    assert parent[0] == -1 and parent[1] == 0
+    blocked[0:4, 2] = True  # a wall down the middle, open at the bottom row
+    dist, parent = grid_paths(blocked, _source((5, 5), 0, 0), 0.5)
+    # the only way is (4, 1) -> (4, 2) -> (4, 3): no diagonal cuts past the wall's end at (3, 2); to (4, 1)
+    # and from (4, 3) is one diagonal and three straight steps each
+    assert dist[0, 4] == pytest.approx(2 * 0.5 * (3 + math.sqrt(2)) + 2 * 0.5)
+    assert np.isinf(dist[1, 2])
+    # walk the parents back from (0, 4): every step goes between free neighbours
+    u, cells = 4, []
+    while u >= 0:
+        cells.append(divmod(u, 5))
+        u = parent[u]
+    assert cells[-1] == (0, 0) and all(not blocked[r, c] for r, c in cells)
+    assert any(r == 4 for r, _ in cells)
+    sealed = np.zeros((5, 5), dtype=bool)
+    sealed[2, :] = True
+    dist, _ = grid_paths(sealed, _source((5, 5), 0, 0), 0.5)
+    assert np.isinf(dist[3:]).all() and np.isfinite(dist[:2]).all()
+
+
+def test_grid_paths_from_several_sources_take_the_cheapest():
+    start = np.full((1, 6), np.inf)
+    start[0, 0], start[0, 5] = 0.0, 0.2  # the right-hand source starts 0.2 m behind
+    dist, parent = grid_paths(np.zeros((1, 6), dtype=bool), start, 0.5)
+    assert dist[0] == pytest.approx([0.0, 0.5, 1.0, 1.2, 0.7, 0.2])
+    assert parent[3] == 4 and parent[2] == 1 and parent[0] == parent[5] == -1
+
+
+def test_paths_start_on_the_robots_side_of_a_wall_in_its_own_cell():
+    """A wall 0.2 m east of the robot runs through the robot's own cell: paths must not start there (they
+    would lead through the wall), but from the free neighbours the scan shows on the robot's side."""
+    wall = np.zeros((3, 4), dtype=bool)
+    wall[:, 1] = True  # the wall's cells, x in [0.5, 1.0)
+    pose = np.array([0.7, 0.75, 0.0])
+    angles = np.arange(8) * (2.0 * math.pi / 8)
+    scan = np.array([0.2, 0.28, 5.0, 5.0, 5.0, 5.0, 5.0, 0.28])  # east, north-east and south-east: the wall
+    sources = path_sources(wall, np.array([0.0, 0.0, 2.0, 1.5]), 0.5, pose, scan, angles)
+    assert np.isfinite(sources[:, 0]).all() and np.isinf(sources[:, 1:]).all()
+    assert sources[1, 0] == pytest.approx(0.45) and sources[0, 0] == pytest.approx(math.hypot(0.45, 0.5))
+    dist, _ = grid_paths(wall, sources, 0.5)
+    assert np.isinf(dist[:, 2:]).all()  # the far side stays out of reach
+    # away from walls a path starts in the robot's own cell
+    free = path_sources(np.zeros((3, 4), dtype=bool), np.array([0.0, 0.0, 2.0, 1.5]), 0.5, pose, scan, angles)
+    assert free[1, 1] == 0.0 and np.isfinite(free).sum() == 1
+
+
+def test_wall_memory_marks_scan_ends_joins_near_ones_and_clears_crossed_cells():
+    wall = np.zeros((10, 10), dtype=bool)
+    wall[5, 3] = True  # an old wall cell that a beam now crosses
+    angles = np.array([0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi])
+    # from (1.25, 2.75) heading east: a wall 2 m ahead, nothing to the north, west or south (scan_max = 5)
+    scan = np.array([2.0, 5.0, 5.0, 5.0])
+    update_walls(wall, 0.0, 0.0, 0.5, 1.25, 2.75, 0.0, angles, scan, 5.0 - 1e-6, 1.5)
+    assert wall[5, 6]  # the end point (3.25, 2.75)
+    assert not wall[5, 3] and wall.sum() == 1
+    # two end points 1 m apart are joined into one surface; 3 m apart they are not
+    wall[:] = False
+    two = np.array([0.0, 0.25 * math.pi])
+    update_walls(wall, 0.0, 0.0, 0.5, 0.25, 0.25, 0.0, two, np.array([3.0, 3.0 * math.sqrt(2)]), 5.0, 1.5)
+    assert not wall[3, 6]  # (3.25, 1.75) lies on the segment between (3.25, 0.25) and (3.25, 3.25) only
+    update_walls(wall, 0.0, 0.0, 0.5, 0.25, 0.25, 0.0, two, np.array([3.0, 3.0 * math.sqrt(2)]), 5.0, 3.5)
+    assert wall[0:7, 6].all()
+
+
+class _PublicEnv:
+    """An env with the public read-only properties: the agent must read those."""
+
+    def __init__(self):
+        self.unwrapped = self
+        self._memory = None
+        self._bounds = None
+
+    @property
+    def coverage_memory(self):
+        return np.full((2, 3), 7.0)
+
+    @property
+    def bounds(self):
+        return np.array([1.0, 2.0, 3.0, 4.0])
+
+
+def test_coverage_and_bounds_prefers_the_public_properties():
+    memory, bounds = coverage_and_bounds(_PublicEnv())
+    assert memory[0, 0] == 7.0 and np.array_equal(bounds, [1.0, 2.0, 3.0, 4.0])
+    env = gym.make("EKFSLAM-v0")
+    env.reset(seed=0)
+    memory, bounds = coverage_and_bounds(env)
+    assert memory.shape == (40, 40) and memory.sum() > 0 and np.array_equal(bounds, [0.0, 0.0, 20.0, 20.0])
+    env.close()
+
+
+def test_frontier_is_registered_as_a_baseline():
+    assert AGENTS["frontier"] is FrontierAgent and "frontier" in BASELINES
+    assert isinstance(make_agent("frontier", replan_every=5), FrontierAgent)
+    with pytest.raises(ValueError):
+        FrontierAgent(min_region=0)
+
+
+def _episode(seed, steps=None, env_id="EKFSLAM-v0", **kwargs):
+    env = gym.make(env_id) if steps is None else gym.make(env_id, max_episode_steps=steps)
+    observation, _ = env.reset(seed=seed)
+    agent = FrontierAgent(**kwargs)
+    agent.reset(env, seed=seed)
+    actions, modes = [], set()
+    while True:
+        action = agent.act(observation)
+        actions.append(action)
+        modes.add(agent.mode)
+        observation, _, terminated, truncated, info = env.step(action)
+        if terminated or truncated:
+            break
+    seen = float(np.mean(env.unwrapped.filter.observed))
+    env.close()
+    return np.array(actions), info, seen, modes
+
+
+def test_actions_are_deterministic_for_a_seed_and_valid():
+    first, _, _, _ = _episode(3, steps=150)
+    second, _, _, _ = _episode(3, steps=150)
+    assert np.array_equal(first, second)
+    assert first.dtype == np.float32 and first.shape == (150, 2)
+    assert np.all(np.isfinite(first)) and np.all(np.abs(first) <= 1.0)
+    assert np.abs(first[:, 0]).mean() > 0.5  # it drives, most of the time near full speed
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_sees_most_landmarks_without_touching_a_wall(seed):
+    """A behavioural check of the baseline (the random agent sees about 0.3 of them in EKFSLAM-v0)."""
+    _, info, seen, _ = _episode(seed)
+    assert seen >= 0.9
+    assert info["collisions"] == 0
+
+
+def test_goes_round_the_loop(monkeypatch):
+    """EKFSLAM-Loop-v0: the corridor ring is explored around the central block; and the agent never reads the
+    true map or pose (the env's privileged accessors raise for the whole episode)."""
+
+    def forbidden(self):
+        raise AssertionError("the frontier agent read privileged state")
+
+    monkeypatch.setattr(EKFSLAMEnv, "world", property(forbidden))
+    monkeypatch.setattr(EKFSLAMEnv, "true_landmarks", property(forbidden))
+    _, info, seen, modes = _episode(2, env_id="EKFSLAM-Loop-v0")
+    assert seen >= 0.9 and info["collisions"] == 0
+    assert modes == {"explore", "revisit"}  # it ran out of frontiers and went back to improve the map
