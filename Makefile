@@ -11,7 +11,7 @@ STAMP := $(VENV)/.installed-$(subst $(comma),-,$(EXTRAS))
 export OPENBLAS_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: install demo test test-fast bench lint clean
+.PHONY: install demo test test-fast test-rllib bench lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -43,6 +43,19 @@ test: install
 test-fast: install
 	$(BIN)/python -m pytest -m "not slow"
 
+# RLlib pins its own gymnasium (Ray 2.60: 1.2.2), so it gets an environment of its own, torch first as above;
+# the env's tests run there too, showing the package works on that gymnasium.
+RLLIB_VENV ?= .venv-rllib
+RLLIB_PIP := $(RLLIB_VENV)/bin/python -m pip --disable-pip-version-check
+$(RLLIB_VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(RLLIB_VENV)
+	$(RLLIB_PIP) install -q --progress-bar off torch==2.13.0
+	$(RLLIB_PIP) install -q --progress-bar off ".[rllib]" "pytest>=8"
+	touch $@
+
+test-rllib: $(RLLIB_VENV)/.installed
+	$(RLLIB_VENV)/bin/python -m pytest -p no:cacheprovider tests/test_rllib.py tests/test_env.py tests/test_golden_rollouts.py
+
 bench: install  # bench/graph.py compares with GTSAM when the bench extra is installed (EXTRAS=...,bench)
 	$(BIN)/python bench/startup.py
 	$(BIN)/python bench/ekf.py
@@ -56,4 +69,4 @@ lint: install
 	$(BIN)/ruff check . && $(BIN)/ruff format --check .
 
 clean:
-	rm -rf $(VENV) out .pytest_cache
+	rm -rf $(VENV) $(RLLIB_VENV) out .pytest_cache

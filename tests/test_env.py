@@ -159,7 +159,12 @@ def test_step_before_reset_is_an_error():
     ],
 )
 def test_bad_configs_raise_errors_naming_the_field(overrides, field):
-    with pytest.raises(ValueError, match=field.replace(".", r"\.")):
+    error = ValueError
+    if "max_episode_steps" in overrides:
+        # gymnasium's TimeLimit refuses it before the env is built: ValueError in 1.4, AssertionError in 1.2
+        # (the version RLlib pins)
+        error = (ValueError, AssertionError)
+    with pytest.raises(error, match=field.replace(".", r"\.")):
         gym.make("EKFSLAM-v0", **overrides)
 
 
