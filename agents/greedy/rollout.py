@@ -10,19 +10,10 @@ from typing import Any
 import numpy as np
 
 from ekfslam_gym.angles import wrap_angles
+from ekfslam_gym.envs.actions import PRIMITIVES
 from ekfslam_gym.sim.odometry import odometry_std, velocity_std
 
-DEFAULT_PRIMITIVES: tuple[tuple[float, float], ...] = (
-    (1.0, 0.0),
-    (1.0, 0.25),
-    (1.0, -0.25),
-    (1.0, 0.5),
-    (1.0, -0.5),
-    (0.5, 1.0),
-    (0.5, -1.0),
-    (0.0, 1.0),
-    (0.0, -1.0),
-)
+DEFAULT_PRIMITIVES = PRIMITIVES  # the env's own set, so a primitives policy and the planner choose alike
 
 
 def primitive_controls(

@@ -10,6 +10,7 @@ import importlib
 
 _HOMES = {
     "EKFSLAMEnv": "ekfslam_env",
+    "ActionConfig": "config",
     "EnvConfig": "config",
     "FilterConfig": "config",
     "ObservationConfig": "config",
@@ -18,6 +19,7 @@ _HOMES = {
     "HorizonSync": "horizon",
     "ObservationLayout": "observation",
     "PRESETS": "presets",
+    "PRIMITIVES": "actions",
     "REWARD_TERMS": "rewards",
 }
 

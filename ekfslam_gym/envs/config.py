@@ -2,7 +2,8 @@
 ``EKFSLAMEnv.set_max_episode_steps`` replaces it, by a copy with another step limit).
 
 Sections: ``world`` (layout and landmarks), ``robot``, ``sensor`` and ``odometry`` (the simulator's own
-parameter classes), ``filter``, ``reward``, ``observation``, and the episode settings at the top level. Build
+parameter classes), ``filter``, ``reward``, ``observation``, ``action``, and the episode settings at the top
+level. Build
 one from keyword overrides (``EnvConfig.from_overrides(world={"n_landmarks": 50})``) or a YAML file under
 ``configs/env/`` (``EnvConfig.from_yaml(path)``); an unknown or invalid value raises ``ValueError`` naming the
 field, e.g. ``sensor.max_range``.
@@ -154,12 +155,44 @@ class ObservationConfig:
         _positive("observation.coarse_extent", self.coarse_extent)
 
 
+ACTION_KINDS = ("velocity", "primitives", "waypoint")
+DEFAULT_HOLD = {"velocity": 1, "primitives": 10, "waypoint": 10}
+
+
+@dataclass(frozen=True)
+class ActionConfig:
+    """What one env step means (``ekfslam_gym.envs.actions`` describes each kind).
+
+    kind: ``velocity`` (the (forward, turn) command), ``primitives`` (one of the greedy planner's motion
+    primitives, ``Discrete``) or ``waypoint`` (a goal relative to the estimated pose, driven by a scan-only
+    controller). hold: control steps per env step, at most for a waypoint (default 1 for velocity, 10 for the
+    others). waypoint_radius: m, the reach of a waypoint goal (the action's unit).
+    """
+
+    kind: str = "velocity"
+    hold: int | None = None
+    waypoint_radius: float = 3.0
+
+    def __post_init__(self) -> None:
+        _require(
+            self.kind in ACTION_KINDS, "action.kind", f"must be one of {'|'.join(ACTION_KINDS)}", self.kind
+        )
+        if self.hold is not None:
+            _integer("action.hold", self.hold, 1)
+        _positive("action.waypoint_radius", self.waypoint_radius)
+
+    @property
+    def steps(self) -> int:
+        """Control steps per env step (at most, for a waypoint)."""
+        return self.hold if self.hold is not None else DEFAULT_HOLD[self.kind]
+
+
 @dataclass(frozen=True)
 class EnvConfig:
     """Everything an EKFSLAM env needs; see the section classes for units and meanings.
 
-    dt: control period (s); substeps: physics steps per control step; max_episode_steps: the time limit
-    (truncation, and the horizon of the observation's time-left term; ``gym.make`` keeps its TimeLimit
+    dt: control period (s); substeps: physics steps per control step; max_episode_steps: the time limit in env
+    steps (truncation, and the horizon of the observation's time-left term; ``gym.make`` keeps its TimeLimit
     equal to it, see ``ekfslam_gym.envs.horizon``); terminate_on_collision: end the episode
     at the first wall contact; done_std: end the episode when every landmark's marginal standard deviation
     (sqrt of the larger eigenvalue of its 2x2 covariance, m) is below this (0 disables); loop_gap: a re-observed
@@ -173,6 +206,7 @@ class EnvConfig:
     filter: FilterConfig = field(default_factory=FilterConfig)
     reward: RewardConfig = field(default_factory=RewardConfig)
     observation: ObservationConfig = field(default_factory=ObservationConfig)
+    action: ActionConfig = field(default_factory=ActionConfig)
     dt: float = 0.1
     substeps: int = 2
     max_episode_steps: int = 500

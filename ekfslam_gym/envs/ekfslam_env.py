@@ -14,6 +14,7 @@ from .. import compiled
 from ..filter.ekf import EKFSLAM, FilterDivergedError
 from ..sim.layouts import make_layout
 from ..sim.world import World
+from .actions import clipped_velocity, make_interface
 from .config import EnvConfig
 from .observation import ObservationLayout, make_memory, observation_constants
 from .rewards import REWARD_TERMS
@@ -33,7 +34,14 @@ class EKFSLAMEnv(gym.Env):
     ## Action Space
     ``Box(-1, 1, (2,), float32)``: (forward speed, turn rate) as fractions of ``robot.v_max`` (m/s) and
     ``robot.omega_max`` (rad/s). Values outside [-1, 1] are clipped; NaN, inf or a wrong shape raise
-    ``ValueError`` and change nothing.
+    ``ValueError`` and change nothing. That is ``action.kind = "velocity"`` with one control step per env step;
+    the ``action`` section offers macro actions, each driven for up to ``action.hold`` control steps
+    (``ekfslam_gym.envs.actions``): ``primitives``, ``Discrete(9)``, one of the greedy planner's motion
+    primitives (``PRIMITIVES``), held; ``waypoint``, ``Box(-1, 1, (2,))``, a goal (forward, left) x
+    ``action.waypoint_radius`` m from the estimated pose, driven by a controller that sees only the pose
+    estimate and the wall scan, until reached, blocked by a wall, or ``hold`` steps. A macro step's reward is
+    the sum of its control steps' rewards; ``info["reward_terms"]`` sums each term over them, and
+    ``info["inner_steps"]`` and ``info["inner_actions"]`` say what ran.
 
     ## Observation Space
     ``Box(-5, 5, (D,), float32)`` with D = 4 + 3 + 4k + 3 + B + G^2 + C^2 (164 by default: k = 8 landmark
@@ -71,7 +79,7 @@ class EKFSLAMEnv(gym.Env):
     ## Episode End
     Terminated (``_is_terminated``): on a wall contact if ``terminate_on_collision``; when every landmark's
     marginal standard deviation is below ``done_std`` m; when the filter fails numerically
-    (``info["filter_failed"]``, never an exception). Truncated (``_is_truncated``): after N steps, where N, the
+    (``info["filter_failed"]``, never an exception). Truncated (``_is_truncated``): after N env steps, where N, the
     step limit, is one number for the TimeLimit wrapper of ``gym.make``, the env's own truncation and the
     time-left entry, and ``env.spec.max_episode_steps == env.unwrapped.config.max_episode_steps == N``:
     the registered limit by default (500, 800, 1000, in each id's spec); ``gym.make(id, max_episode_steps=N)``
@@ -128,7 +136,11 @@ class EKFSLAMEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": int(round(1.0 / config.dt))}
 
         self._layout = ObservationLayout.from_config(config.observation, config.sensor)
-        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self._interface = make_interface(config)
+        self.action_space = self._interface.space
+        # One control step per env step (the default): step() takes its direct path, as fast as before.
+        self._single = config.action.kind == "velocity" and config.action.steps == 1
+        self._hold = config.action.steps
         self.observation_space = self._layout.space(config.observation.kind)
         self._obs = np.zeros(self._layout.size, dtype=np.float32)
         self._flat = config.observation.kind == "box"
@@ -147,6 +159,7 @@ class EKFSLAMEnv(gym.Env):
         self._ekf: EKFSLAM | None = None
         self._belief: tuple[np.ndarray, ...] | None = None
         self._t = 0
+        self._steps = 0
         self._renderer = None
 
     def set_max_episode_steps(self, steps: int) -> None:
@@ -177,6 +190,7 @@ class EKFSLAMEnv(gym.Env):
         self._memory = make_memory(self._bounds, cfg.observation.memory_resolution)
         self._last_seen = np.full(layout.n_landmarks, -1, dtype=np.int64)
         self._t = 0
+        self._steps = 0
         self._loop_closures = 0
         self._collisions = 0
         self._path_length = 0.0
@@ -208,12 +222,60 @@ class EKFSLAMEnv(gym.Env):
         return self._observation(), info
 
     def step(self, action):
-        ekf = self._ekf
-        if ekf is None:
+        if self._ekf is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        a0, a1 = _clipped_action(action)
-        world, rng = self._world, self.np_random
+        if self._single:
+            a0, a1 = clipped_velocity(action)
+            terms, reward, terminated, nees, rmse, seen, failed = self._control_step(a0, a1)
+            self._steps += 1
+            if failed:
+                return self._failed_step()
+            truncated = not terminated and self._is_truncated()
+            info = self._info(terms, nees, rmse, seen)
+            if self.render_mode == "human":
+                self.render()
+            return self._observation(), reward, terminated, truncated, info
+        return self._macro_step(action)
 
+    def _macro_step(self, action):
+        """Up to ``action.hold`` control steps of one macro action (see ``ekfslam_gym.envs.actions``)."""
+        interface = self._interface
+        mean = self._belief[0]
+        interface.begin(action, mean[:3])
+        totals: dict[str, float] = {}
+        reward, collided, terminated, inner = 0.0, False, False, []
+        for _ in range(self._hold):
+            command = interface.command(mean[:3], self._world.scan)
+            if command is None and inner:
+                break
+            a0, a1 = (0.0, 0.0) if command is None else command
+            terms, step_reward, terminated, nees, rmse, seen, failed = self._control_step(a0, a1)
+            inner.append((a0, a1))
+            if failed:
+                self._steps += 1
+                return self._failed_step(inner)
+            reward += step_reward
+            collided = collided or self._collided
+            for name, value in terms.items():
+                totals[name] = totals.get(name, 0.0) + value
+            if terminated:
+                break
+        self._steps += 1
+        truncated = not terminated and self._is_truncated()
+        info = self._info(totals, nees, rmse, seen)
+        info["collision"] = collided
+        info["inner_steps"] = len(inner)
+        info["inner_actions"] = np.array(inner, dtype=np.float64)
+        if self.render_mode == "human":
+            self.render()
+        return self._observation(), reward, terminated, truncated, info
+
+    def _control_step(self, a0: float, a1: float):
+        """One control step of ``dt`` with the normalised command (a0, a1) already clipped: physics, odometry,
+        readings, filter, reward terms and metrics. Returns (terms, reward, terminated, nees, rmse, seen,
+        failed); the caller builds the observation and info once per env step."""
+        ekf = self._ekf
+        world, rng = self._world, self.np_random
         x0, y0, _ = world.pose_tuple
         collided = world.step(a0 * self._v_max, a1 * self._omega_max)
         x1, y1, _ = world.pose_tuple
@@ -232,12 +294,10 @@ class EKFSLAMEnv(gym.Env):
             failed = not math.isfinite(ekf.log_det)
         except FilterDivergedError:
             failed = True
-        mean, cov, observed, _ = self._belief
         if failed:
-            self._filter_failed = True
-            info = self._info({"info_gain": 0.0}, math.nan, math.nan, int(np.count_nonzero(observed)))
-            return self._observation_out(), 0.0, True, False, info
+            return None, 0.0, True, math.nan, math.nan, 0, True
 
+        mean, cov, observed, _ = self._belief
         self._prev_log_det, self._log_det = self._log_det, ekf.log_det
         self._newly_covered = self._mark_and_trail()
         terms = self._rewards()
@@ -247,12 +307,17 @@ class EKFSLAMEnv(gym.Env):
             self.config.loop_gap,
         )  # fmt: skip
         self._loop_closures += closures
-        terminated = self._is_terminated()
-        truncated = not terminated and self._is_truncated()
-        info = self._info(terms, nees, rmse, seen)
-        if self.render_mode == "human":
-            self.render()
-        return self._observation(), reward, terminated, truncated, info
+        return terms, reward, self._is_terminated(), nees, rmse, seen, False
+
+    def _failed_step(self, inner: list | None = None):
+        """The step on which the filter failed numerically: terminated, reward 0, the last observation."""
+        self._filter_failed = True
+        observed = self._belief[2]
+        info = self._info({"info_gain": 0.0}, math.nan, math.nan, int(np.count_nonzero(observed)))
+        if inner is not None:
+            info["inner_steps"] = len(inner)
+            info["inner_actions"] = np.array(inner, dtype=np.float64)
+        return self._observation_out(), 0.0, True, False, info
 
     # ------------------------------------------------------------------ hooks of a step
     def _rewards(self) -> dict[str, float]:
@@ -296,7 +361,7 @@ class EKFSLAMEnv(gym.Env):
 
     def _is_truncated(self) -> bool:
         """The step limit (``config.max_episode_steps``, which a ``gym.make`` TimeLimit sets) is reached."""
-        return self._t >= self._max_steps
+        return self._steps >= self._max_steps
 
     def _info(self, terms: dict[str, float], nees: float, rmse: float, landmarks_seen: int) -> dict[str, Any]:
         """The step's ``info``; arrays the filter updates in place are copied, the odometry's are new each step."""
@@ -359,7 +424,7 @@ class EKFSLAMEnv(gym.Env):
 
     def _observation(self):
         mean, cov, observed, pose_given_map = self._belief
-        time_left = max(0.0, 1.0 - self._t / self._max_steps)
+        time_left = max(0.0, 1.0 - self._steps / self._max_steps)
         compiled.fill_observation(
             self._obs, self._layout.offsets, self._constants, mean, cov, observed, self._log_det, pose_given_map,
             self._world.scan(), self._memory, self._bounds, time_left,
@@ -408,7 +473,7 @@ class EKFSLAMEnv(gym.Env):
 
     @property
     def elapsed_steps(self) -> int:
-        """Steps taken since the last reset."""
+        """Control steps taken since the last reset (``info["step"]``; env steps too, unless macro actions)."""
         return self._t
 
     def _require_reset(self) -> None:
@@ -453,24 +518,6 @@ class EKFSLAMEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
-
-
-def _clipped_action(action) -> tuple[float, float]:
-    """(forward, turn) as floats clipped to [-1, 1]; ValueError, before anything changes, for a wrong shape or
-    a non-finite value. A float array of shape (2,), what agents pass, takes the fast path."""
-    if type(action) is np.ndarray and action.shape == (2,) and action.dtype.kind == "f":
-        a0, a1 = action.tolist()
-    else:
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (2,):
-            raise ValueError(f"action must have shape (2,), got {a.shape}")
-        a0, a1 = float(a[0]), float(a[1])
-    if not (math.isfinite(a0) and math.isfinite(a1)):
-        raise ValueError(f"action must be finite, got {action!r}")
-    return (
-        -1.0 if a0 < -1.0 else 1.0 if a0 > 1.0 else a0,
-        -1.0 if a1 < -1.0 else 1.0 if a1 > 1.0 else a1,
-    )
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:

@@ -1,0 +1,161 @@
+"""Action interfaces (``action.kind``): macro steps are their control steps summed exactly, the waypoint
+controller reaches free goals and stops short of walls, every kind passes the checkers and is deterministic."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import ekfslam_gym  # noqa: F401  (registers the envs)
+from ekfslam_gym.envs import PRIMITIVES, EKFSLAMEnv
+
+KINDS = [
+    {"kind": "velocity", "hold": 5},
+    {"kind": "primitives"},
+    {"kind": "primitives", "hold": 3},
+    {"kind": "waypoint"},
+]
+
+
+def _actions(env: gym.Env, n: int, seed: int) -> list:
+    env.action_space.seed(seed)
+    return [env.action_space.sample() for _ in range(n)]
+
+
+@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}")
+def test_every_kind_passes_gymnasiums_checker(action):
+    from gymnasium.utils.env_checker import check_env
+
+    check_env(gym.make("EKFSLAM-v0", action=action, max_episode_steps=30).unwrapped, skip_render_check=True)
+
+
+@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}")
+def test_every_kind_passes_sb3s_checker(action):
+    env_checker = pytest.importorskip("stable_baselines3.common.env_checker")
+    env_checker.check_env(EKFSLAMEnv(action=action, max_episode_steps=30), warn=True)
+
+
+@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}")
+def test_a_macro_step_is_its_control_steps_summed_exactly(action):
+    """Replaying each macro step's inner actions one control step at a time gives the same filter state, and
+    the macro reward is exactly the sum of those steps' rewards; each term is the sum of its inner terms."""
+    macro = EKFSLAMEnv(action=action, max_episode_steps=40)
+    single = EKFSLAMEnv(max_episode_steps=10_000)
+    macro.reset(seed=7)
+    single.reset(seed=7)
+    for a in _actions(macro, 40, seed=1):
+        _, reward, terminated, truncated, info = macro.step(a)
+        inner = info["inner_actions"]
+        assert inner.shape == (info["inner_steps"], 2) and 1 <= len(inner) <= macro.config.action.steps
+        total, terms = 0.0, {}
+        for command in inner:
+            _, r, *_, single_info = single.step(command.astype(np.float64))
+            total += r
+            for name, value in single_info["reward_terms"].items():
+                terms[name] = terms.get(name, 0.0) + value
+        assert reward == total
+        assert info["reward_terms"] == terms
+        assert np.array_equal(macro.filter.mean, single.filter.mean)
+        assert np.array_equal(macro.filter.cov, single.filter.cov)
+        assert info["step"] == single_info["step"]
+        if terminated or truncated:
+            break
+
+
+def test_information_gain_telescopes_over_macro_steps():
+    env = EKFSLAMEnv(action={"kind": "primitives"}, max_episode_steps=20)
+    _, info = env.reset(seed=3)
+    start, gains = info["log_det"], 0.0
+    for a in _actions(env, 20, seed=2):
+        _, _, terminated, truncated, info = env.step(a)
+        gains += info["reward_terms"]["info_gain"]
+        if terminated or truncated:
+            break
+    assert gains == pytest.approx(start - info["log_det"], rel=1e-9, abs=1e-6)
+    assert truncated  # the limit counts env steps: 20 macro steps of 10 control steps
+    assert info["step"] == 200
+
+
+@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}")
+def test_rollouts_are_deterministic(action):
+    def rollout():
+        env = gym.make("EKFSLAM-v0", action=action, max_episode_steps=25)
+        obs, _ = env.reset(seed=11)
+        out = [obs]
+        for a in _actions(env, 25, seed=5):
+            obs, reward, *_ = env.step(a)
+            out += [obs, np.array([reward])]
+        return np.concatenate([np.ravel(x) for x in out])
+
+    assert np.array_equal(rollout(), rollout())
+
+
+def test_primitives_are_the_greedy_planners_and_bad_indices_are_refused():
+    from agents.greedy import DEFAULT_PRIMITIVES
+
+    assert tuple(DEFAULT_PRIMITIVES) == PRIMITIVES
+    env = EKFSLAMEnv(action={"kind": "primitives"})
+    assert env.action_space == gym.spaces.Discrete(len(PRIMITIVES))
+    env.reset(seed=0)
+    pose = env.world.pose
+    for bad in (len(PRIMITIVES), -1, 1.5, np.array([0, 1])):
+        with pytest.raises(ValueError, match="primitives action"):
+            env.step(bad)
+    assert np.array_equal(env.world.pose, pose) and env.elapsed_steps == 0  # nothing changed
+    env.step(np.int64(0))
+    assert env.elapsed_steps == 10
+
+
+def test_bad_action_configs_name_the_field():
+    with pytest.raises(ValueError, match="action.kind"):
+        EKFSLAMEnv(action={"kind": "teleport"})
+    with pytest.raises(ValueError, match="action.hold"):
+        EKFSLAMEnv(action={"kind": "primitives", "hold": 0})
+    with pytest.raises(ValueError, match="action.waypoint_radius"):
+        EKFSLAMEnv(action={"kind": "waypoint", "waypoint_radius": -1.0})
+
+
+def _open_arena(**action):
+    """An arena with the start pose far from every wall (the layout's start is random)."""
+    env = EKFSLAMEnv(action={"kind": "waypoint", **action}, world={"layout": "arena"}, max_episode_steps=200)
+    for seed in range(50):
+        env.reset(seed=seed)
+        x, y, _ = env.world.pose
+        xmin, ymin, xmax, ymax = env.bounds
+        if min(x - xmin, xmax - x, y - ymin, ymax - y) > 5.0:
+            return env
+    raise AssertionError("no start pose 5 m from the walls")
+
+
+def test_a_waypoint_in_free_space_is_reached():
+    env = _open_arena(hold=60)
+    start = env.filter.pose.copy()
+    _, _, _, _, info = env.step(np.array([1.0, 0.5], dtype=np.float32))  # 3 m ahead, 1.5 m to the left
+    goal = start[:2] + np.array(
+        [[math.cos(start[2]), -math.sin(start[2])], [math.sin(start[2]), math.cos(start[2])]]
+    ) @ np.array([3.0, 1.5])
+    assert info["inner_steps"] < 60  # it stopped because it got there
+    assert np.linalg.norm(env.filter.pose[:2] - goal) <= env.unwrapped._interface.controller.tolerance + 1e-9
+    assert not info["collision"]
+
+
+def test_a_waypoint_behind_a_wall_stops_short_of_it():
+    env = _open_arena(hold=200, waypoint_radius=30.0)
+    x, y, theta = env.world.pose
+    xmin, ymin, xmax, ymax = env.bounds
+    # Face east first (turn in place with a waypoint just to the side), then aim 30 m east: beyond the wall.
+    heading_east = -theta
+    forward, left = math.cos(heading_east), math.sin(heading_east)
+    collisions = 0
+    for _ in range(6):
+        _, _, _, _, info = env.step(np.array([forward, left], dtype=np.float32))
+        collisions += info["collision"]
+        x, y, theta = env.world.pose
+        heading_east = -theta
+        forward, left = math.cos(heading_east), math.sin(heading_east)
+    assert collisions == 0
+    assert xmax - x < 1.5  # it drove up to the wall ...
+    assert xmax - x > env.config.robot.radius  # ... and stopped short of it
