@@ -135,7 +135,10 @@ class PPOAgent(Agent):
         if self.vecnormalize is not None and self.vecnormalize.norm_obs:
             observation = self.vecnormalize.normalize_obs(observation)
         action, _ = self.model.predict(observation, deterministic=self.deterministic)
-        return np.clip(np.asarray(action, dtype=np.float32).reshape(2), -1.0, 1.0)
+        space = self.model.action_space
+        if isinstance(space, gym.spaces.Discrete):  # action.kind primitives
+            return np.int64(np.asarray(action).reshape(()))
+        return np.clip(np.asarray(action, dtype=np.float32).reshape(space.shape), space.low, space.high)
 
     def __repr__(self) -> str:
         return f"PPOAgent(model_path={str(self.model_path)!r})"

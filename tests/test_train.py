@@ -119,3 +119,19 @@ def test_rl_zoo3_trains_and_enjoys_on_the_project_config(tmp_path):
                  "--deterministic", "--env-kwargs", "max_episode_steps:100"]  # fmt: skip
     run = subprocess.run(enjoy_cmd, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
+
+
+def test_a_primitives_policy_trains_and_evaluates_on_its_own_env_settings(tmp_path):
+    """The evaluator reads the action interface (and limits) from the record beside the model."""
+    from ekfslam_gym.cli import evaluate
+
+    out = tmp_path / "prim"
+    overrides = [*SMOKE[:-1], "env_kwargs={action: {kind: primitives, hold: 3}, max_episode_steps: 30}"]
+    train.main(["--timesteps", "256", "--out", str(out), "--seed", "1", "--no-progress", "--hyperparams",
+                *overrides])  # fmt: skip
+    from stable_baselines3 import PPO
+
+    assert PPO.load(out / "model.zip").action_space.n == 9
+    status = evaluate.main(["--agent", "ppo,circle", "--model", str(out / "model.zip"), "--seeds", "20000",
+                            "--json", "--no-progress"])  # fmt: skip
+    assert status == 0

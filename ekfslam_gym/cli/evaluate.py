@@ -46,7 +46,8 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument("--env-kwargs", type=json.loads, default=None,
-                        help='config overrides as JSON, e.g. \'{"world": {"n_landmarks": 50}}\'')  # fmt: skip
+                        help='config overrides as JSON, e.g. \'{"world": {"n_landmarks": 50}}\'; a trained policy '
+                             "runs on its own training env settings (read beside the model) with these on top")  # fmt: skip
     parser.add_argument("--agent-kwargs", type=json.loads, default=None,
                         help='constructor arguments per agent as JSON, e.g. \'{"circle": {"radius": 2.0}}\'')  # fmt: skip
     parser.add_argument("--seeds", type=parse_seeds, default=list(HELD_OUT_SEEDS),
@@ -120,10 +121,15 @@ def main(argv: Sequence[str] | None = None) -> int:
                     f"warning: {agent!r} was trained on {trained_id}, evaluated on {args.env_id}",
                     file=sys.stderr,
                 )
-            if trained_kwargs is not None and dict(trained_kwargs) != dict(args.env_kwargs or {}):
+            overridden = sorted(
+                k
+                for k, v in (args.env_kwargs or {}).items()
+                if k in (trained_kwargs or {}) and trained_kwargs[k] != v
+            )
+            if overridden:
                 print(
-                    f"warning: {agent!r} was trained with env_kwargs {trained_kwargs}, evaluated with "
-                    f"{args.env_kwargs or {}} (pass --env-kwargs to match)",
+                    f"warning: {agent!r} was trained with env_kwargs {trained_kwargs}; --env-kwargs overrides "
+                    f"{overridden}",
                     file=sys.stderr,
                 )
 
@@ -132,8 +138,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         rows: list[dict[str, float]] = []
         for k, agent in enumerate(agent_list):
             tag = label if len(agent_list) == 1 else f"{label}{k}"
+            # A trained policy runs on the env settings it was trained with (its action interface, limits,
+            # ...), read from the record beside the model; --env-kwargs goes on top, for every agent.
+            env_kwargs = {**(getattr(agent, "trained_env_kwargs", None) or {}), **(args.env_kwargs or {})}
             rows += evaluate_agent(
-                agent, args.env_id, args.seeds, args.env_kwargs, max_episode_steps=args.max_episode_steps,
+                agent, args.env_id, args.seeds, env_kwargs, max_episode_steps=args.max_episode_steps,
                 gif_dir=args.gif, gif_stride=args.gif_stride, gif_scale=args.gif_scale, label=tag,
                 progress=not args.no_progress,
                 smoother=args.smoother,

@@ -94,6 +94,9 @@ def make_env(
 
     kwargs = dict(env_kwargs or {})
     limit = None
+    if max_episode_steps is None and "max_episode_steps" in kwargs:  # gym.make's own argument, from a record
+        max_episode_steps = kwargs.pop("max_episode_steps")
+    kwargs.pop("max_episode_steps", None)
     if max_episode_steps is not None:
         base = kwargs.get("config", gym.spec(env_id).kwargs.get("config"))
         if base is None or isinstance(base, Mapping):
