@@ -47,6 +47,7 @@ from scipy import ndimage
 from ekfslam_gym.envs.waypoint import WaypointController
 
 from .base import Agent, beam_angles, clip_action, wall_scan
+from .greedy.grid import update_walls
 
 EIGHT_NEIGHBOURS = np.ones((3, 3), dtype=bool)
 
@@ -159,45 +160,6 @@ def path_sources(
     if not np.isfinite(cost).any():
         cost[row, col] = 0.0
     return cost
-
-
-@njit(cache=True)
-def _paint(grid, xmin, ymin, cell, x0, y0, x1, y1, value):
-    """Set the cells along the segment (x0, y0)-(x1, y1) to ``value`` (sampled every quarter cell)."""
-    ny, nx = grid.shape
-    n = int(math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2) / (0.25 * cell)) + 1
-    for i in range(n + 1):
-        t = i / n
-        col = int(math.floor((x0 + t * (x1 - x0) - xmin) / cell))
-        row = int(math.floor((y0 + t * (y1 - y0) - ymin) / cell))
-        if 0 <= row < ny and 0 <= col < nx:
-            grid[row, col] = value
-
-
-@njit(cache=True)
-def update_walls(wall, xmin, ymin, cell, x, y, theta, angles, scan, scan_max, join):
-    """Fold one scan into the wall memory: clear the cells each beam crossed, then mark the cells its end point
-    and the surface to a neighbouring end point closer than ``join`` m fall in (clearing first reopens a doorway
-    an earlier scan joined across, once a beam passes through it)."""
-    n = scan.shape[0]
-    half = 0.5 * cell
-    for i in range(n):
-        reach = scan[i] - half
-        if reach > 0.0:
-            a = theta + angles[i]
-            _paint(wall, xmin, ymin, cell, x, y, x + reach * math.cos(a), y + reach * math.sin(a), False)
-    for i in range(n):
-        if scan[i] >= scan_max:
-            continue
-        a = theta + angles[i]
-        px, py = x + scan[i] * math.cos(a), y + scan[i] * math.sin(a)
-        _paint(wall, xmin, ymin, cell, px, py, px, py, True)
-        k = (i + 1) % n
-        if scan[k] < scan_max:
-            b = theta + angles[k]
-            qx, qy = x + scan[k] * math.cos(b), y + scan[k] * math.sin(b)
-            if (qx - px) ** 2 + (qy - py) ** 2 < join * join:
-                _paint(wall, xmin, ymin, cell, px, py, qx, qy, True)
 
 
 @njit(cache=True)

@@ -17,8 +17,8 @@ from agents.frontier import (
     frontier_regions,
     grid_paths,
     path_sources,
-    update_walls,
 )
+from agents.greedy.grid import update_walls
 from ekfslam_gym.envs import EKFSLAMEnv
 
 

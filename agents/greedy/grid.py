@@ -97,13 +97,14 @@ def count_new(seen, stamp, tag, xmin, ymin, cell, poses, min_range, max_range, h
 
 @njit(cache=True)
 def paint(grid, xmin, ymin, cell, x0, y0, x1, y1, value):
-    """Set the cells along the segment (x0, y0)-(x1, y1) to ``value`` (samples every quarter cell)."""
+    """Set the cells along the segment (x0, y0)-(x1, y1) to ``value`` (samples every quarter cell; points left of
+    or below the grid fall outside it, not into its first cell)."""
     ny, nx = grid.shape
     n = int(math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2) / (0.25 * cell)) + 1
     for i in range(n + 1):
         t = i / n
-        col = int((x0 + t * (x1 - x0) - xmin) / cell)
-        row = int((y0 + t * (y1 - y0) - ymin) / cell)
+        col = int(math.floor((x0 + t * (x1 - x0) - xmin) / cell))
+        row = int(math.floor((y0 + t * (y1 - y0) - ymin) / cell))
         if 0 <= row < ny and 0 <= col < nx:
             grid[row, col] = value
 

@@ -121,17 +121,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                     f"warning: {agent!r} was trained on {trained_id}, evaluated on {args.env_id}",
                     file=sys.stderr,
                 )
-            overridden = sorted(
-                k
-                for k, v in (args.env_kwargs or {}).items()
-                if k in (trained_kwargs or {}) and trained_kwargs[k] != v
-            )
-            if overridden:
-                print(
-                    f"warning: {agent!r} was trained with env_kwargs {trained_kwargs}; --env-kwargs overrides "
-                    f"{overridden}",
-                    file=sys.stderr,
-                )
+            if trained_kwargs is not None:
+                evaluated = {**trained_kwargs, **(args.env_kwargs or {})}
+                if evaluated != dict(trained_kwargs):
+                    print(
+                        f"warning: {agent!r} was trained with env_kwargs {trained_kwargs}, evaluated with "
+                        f"{evaluated} (--env-kwargs goes on top of the training settings)",
+                        file=sys.stderr,
+                    )
 
     episodes: dict[str, list[dict[str, float]]] = {}
     for label, agent_list in entries:
