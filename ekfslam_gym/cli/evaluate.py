@@ -6,9 +6,13 @@ Usage::
     python -m ekfslam_gym.evaluate --agent ppo --model models/ppo_EKFSLAM-v0.zip --json
     python -m ekfslam_gym.evaluate --compare --model models/ppo_EKFSLAM-v0.zip --table results.md --plot results.png
     python -m ekfslam_gym.evaluate --agent random,circle --seeds 0-9 --max-episode-steps 100 --gif gifs/
+    python -m ekfslam_gym.evaluate --agent greedy --seeds 0-4 --export-tum tum/   # then: evo_ape tum ...
 
 The default seeds are the held-out suite (10000-10049). The metrics are described in
-``ekfslam_gym.evaluation.episodes``, the JSON output in ``ekfslam_gym.evaluation.report``.
+``ekfslam_gym.evaluation.episodes``, the JSON output in ``ekfslam_gym.evaluation.report``. ``--export-tum DIR``
+writes, per episode, ``<agent>_<seed>_true.tum`` and ``<agent>_<seed>_estimate.tum`` (TUM trajectories: the
+poses after each step at step * dt s, z = 0, the heading as a quaternion about z; evo's APE on them without
+alignment is the ``ate`` metric) and ``<agent>_<seed>_landmarks.csv`` (``ekfslam_gym.data.tum``).
 """
 
 from __future__ import annotations
@@ -64,6 +68,10 @@ def _build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--smoother", action="store_true",
                         help="also smooth every episode with graph SLAM and report smoother_ate and "
                              "smoother_landmark_rmse beside the filter's ate and landmark_rmse")  # fmt: skip
+    parser.add_argument("--export-tum", metavar="DIR", default=None,
+                        help="write per episode <agent>_<seed>_true.tum and <agent>_<seed>_estimate.tum (TUM "
+                             "trajectories for evo, stamped step * dt s) and <agent>_<seed>_landmarks.csv "
+                             "(id, true x, y, estimated x, y, seen) to DIR")  # fmt: skip
     return parser
 
 
@@ -142,7 +150,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 agent, args.env_id, args.seeds, env_kwargs, max_episode_steps=args.max_episode_steps,
                 gif_dir=args.gif, gif_stride=args.gif_stride, gif_scale=args.gif_scale, label=tag,
                 progress=not args.no_progress,
-                smoother=args.smoother,
+                smoother=args.smoother, tum_dir=args.export_tum,
             )  # fmt: skip
         episodes[label] = rows
     keys = METRIC_KEYS + (SMOOTHER_KEYS if args.smoother else ())

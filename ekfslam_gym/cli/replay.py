@@ -2,12 +2,17 @@
 
     python -m ekfslam_gym.replay [--data PATH [--world PATH]] [--steps N] [--sequential]
         [--init {course,inverse}] [--seed S] [--json] [--save-state FILE.npz]
-        [--plot FILE.png] [--gif FILE.gif]
+        [--plot FILE.png] [--gif FILE.gif] [--tum FILE]
 
 Defaults are the course's EKF-SLAM exercise (Freiburg *Robot Mapping*): R = diag(0.1, 0.1, 0.01) on the pose, Q = 0.01 I per reading, landmark
 prior 1000, zero pose prior at the origin, course initialisation, batch update, every block read (331 steps
 on the course file; ``--steps 330`` gives the course framework's run). Landmark slots follow the sorted world
 ids, or ids 1..max id seen when there is no world file.
+
+``--tum FILE`` writes the estimated trajectory (the start and the pose after each step, t = 0..N) as a TUM file
+for the evo tools and, for the simulated drive, the true one beside it as ``<stem>_true<suffix>`` (``run.tum``
+and ``run_true.tum``). Course-format files carry no true trajectory: with ``--data`` only the estimate is
+written. The course format has no clock either: a step's timestamp is its index, in seconds.
 """
 
 from __future__ import annotations
@@ -24,7 +29,7 @@ import numpy as np
 from ..angles import wrap_angle
 from ..data.course import read_sensor_data, read_world
 from ..data.synthetic import simulate_drive
-from ..evaluation.replay import ReplayResult, replay, summary
+from ..evaluation.replay import ReplayResult, export_tum, replay, summary, true_path_name
 from ..filter import FilterDivergedError
 
 MAX_GIF_FRAMES = 80  # enough for a smooth loop, few enough to render in seconds
@@ -88,6 +93,14 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--save-state", type=Path, metavar="FILE.npz", help="write mean, cov and log_det")
     parser.add_argument("--plot", type=Path, metavar="FILE.png", help="draw the final belief")
     parser.add_argument("--gif", type=Path, metavar="FILE.gif", help="animate the belief over the drive")
+    parser.add_argument(
+        "--tum",
+        type=Path,
+        metavar="FILE",
+        help="write the estimated trajectory as a TUM file for evo (t = step s) and, for the simulated drive, "
+        "the true one as <stem>_true<suffix>; course files (--data) have no true trajectory, so only the "
+        "estimate is written",
+    )
     return parser
 
 
@@ -113,6 +126,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     _check_output(parser, args.save_state, ".npz", "--save-state")
     _check_output(parser, args.plot, ".png", "--plot")
     _check_output(parser, args.gif, ".gif", "--gif")
+    if args.tum is not None and not args.tum.parent.is_dir():
+        parser.error(f"--tum: directory {args.tum.parent} does not exist")
     if args.plot is not None or args.gif is not None:
         try:
             import matplotlib  # noqa: F401
@@ -193,6 +208,10 @@ def _write_outputs(args: argparse.Namespace, result: ReplayResult) -> list[str]:
     if args.gif is not None:
         plotting.save_gif(args.gif, result.frames, result.world)
         written.append(f"wrote animation ({len(result.frames)} frames) to {args.gif}")
+    if args.tum is not None:
+        paths = export_tum(result, args.tum)
+        truth = f", the true one to {true_path_name(args.tum)}" if len(paths) > 1 else " (no true trajectory)"
+        written.append(f"wrote the estimated trajectory (TUM) to {args.tum}{truth}")
     return written
 
 

@@ -11,14 +11,18 @@ final estimates of the seen landmarks), ``missed_landmarks`` (never seen), ``see
 estimated vs true positions over the steps, no alignment), ``anees`` (the pose NEES averaged over the steps),
 ``nees_in_bounds`` (fraction of steps whose pose NEES lies within the per-step 95 % chi-squared bounds, ideally
 0.95), ``loop_closures``, ``collisions`` (steps in contact with a wall) and ``path_length`` (m, true).
+
+``export_tum`` writes an episode's true and estimated trajectories and its map for the evo tools
+(``data.tum``).
 """
 
 from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -150,13 +154,20 @@ def episode_metrics(
 
 
 def run_episode(
-    env: gym.Env, agent: Any, seed: int, frames: Any = None, recording: EpisodeRecorder | None = None
+    env: gym.Env,
+    agent: Any,
+    seed: int,
+    frames: Any = None,
+    recording: EpisodeRecorder | None = None,
+    trajectories: Callable[[np.ndarray, np.ndarray], object] | None = None,
 ) -> dict[str, float]:
     """One seeded episode of ``agent`` in ``env``: its metrics (``seed``, ``steps`` and ``METRIC_KEYS``).
 
     Appends each rendered frame to ``frames`` if given (a list or a ``GifRecorder``) and the odometry and
     readings of every step to ``recording`` if given (what the graph smoother needs). The trajectory metrics
-    use the steps after reset (at reset the estimate is the true pose by construction).
+    use the steps after reset (at reset the estimate is the true pose by construction); ``trajectories``, if
+    given, is called once at the end, the env still in its final state, with those (T, 3) true and estimated
+    poses (e.g. ``export_tum``).
     """
     observation, info = env.reset(seed=seed)
     agent.reset(env, seed=seed)
@@ -179,10 +190,32 @@ def run_episode(
             frames.append(env.render())
         if terminated or truncated:
             break
-    result = episode_metrics(
-        env, total, np.array(true_poses), np.array(estimated_poses), np.array(step_nees, dtype=float), info
-    )
+    true, estimated = np.array(true_poses, dtype=float), np.array(estimated_poses, dtype=float)
+    if trajectories is not None:
+        trajectories(true, estimated)
+    result = episode_metrics(env, total, true, estimated, np.array(step_nees, dtype=float), info)
     return {"seed": int(seed), "steps": steps, **result}
+
+
+def export_tum(
+    directory: str | Path, label: str, seed: int, env: gym.Env, true: np.ndarray, estimated: np.ndarray
+) -> list[Path]:
+    """Write an episode for the evo tools: ``<label>_<seed>_true.tum`` and ``<label>_<seed>_estimate.tum`` (the
+    (T, 3) poses after each step t = 1..T, stamped t * dt s: the ones ``ate`` scores, so evo's APE without
+    alignment is that ATE) and ``<label>_<seed>_landmarks.csv`` (the env's final map by slot; ``data.tum``)."""
+    from ..data.tum import write_landmarks_csv, write_tum
+
+    u = env.unwrapped
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    stem = directory / f"{label}_{seed}"
+    timestamps = np.arange(1, len(true) + 1) * float(u.config.dt)
+    ekf = u.filter
+    return [
+        write_tum(f"{stem}_true.tum", timestamps, true),
+        write_tum(f"{stem}_estimate.tum", timestamps, estimated),
+        write_landmarks_csv(f"{stem}_landmarks.csv", u.true_landmarks, ekf.landmarks, ekf.observed),
+    ]
 
 
 def evaluate_agent(
@@ -198,12 +231,14 @@ def evaluate_agent(
     label: str | None = None,
     progress: bool = False,
     smoother: bool = False,
+    tum_dir: str | Path | None = None,
 ) -> list[dict[str, float]]:
     """Run ``agent`` (an ``agents.Agent`` or a registered name) once per seed; one metrics dict per episode.
 
     Each dict holds ``seed``, ``steps`` and the ``METRIC_KEYS``. With ``gif_dir``, one GIF per episode,
     ``<label>_seed<seed>.gif``, every ``gif_stride``-th frame of ``env.render()``; with ``smoother``, also the
-    ``SMOOTHER_KEYS`` of the episode smoothed by the graph back end.
+    ``SMOOTHER_KEYS`` of the episode smoothed by the graph back end; with ``tum_dir``, the files of
+    :func:`export_tum` for every episode.
     """
     if isinstance(agent, str):
         from agents import make_agent
@@ -223,7 +258,8 @@ def evaluate_agent(
         for seed in iterator:
             frames = GifRecorder(gif_stride, gif_scale) if gif_dir is not None else None
             recording = EpisodeRecorder() if smoother else None
-            result = run_episode(env, agent, seed, frames, recording)
+            export = partial(export_tum, tum_dir, label, seed, env) if tum_dir is not None else None
+            result = run_episode(env, agent, seed, frames, recording, export)
             if recording is not None:
                 compared = compare_with_smoother(recording, env)
                 result.update({key: compared[key] for key in SMOOTHER_KEYS})

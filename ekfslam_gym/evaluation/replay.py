@@ -2,13 +2,15 @@
 
 The course's settings (Freiburg *Robot Mapping*, EKF-SLAM exercise): R = diag(0.1, 0.1, 0.01) on the pose,
 Q = 0.01 I per reading, landmark prior 1000, zero pose prior at the origin, course initialisation, batch
-update. The README's "Data" section gives the known answers the tests hold it to.
+update. The README's "Data" section gives the known answers the tests hold it to. ``export_tum`` writes a
+replay's trajectories for the evo tools (``data.tum``).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -155,3 +157,23 @@ def summary(result: ReplayResult) -> dict[str, object]:
         },
         "log_det": log_det if math.isfinite(log_det) else None,
     }
+
+
+def true_path_name(path: str | Path) -> Path:
+    """The file beside an estimate's TUM file that holds the true trajectory: ``<stem>_true<suffix>``."""
+    path = Path(path)
+    return path.with_name(f"{path.stem}_true{path.suffix}")
+
+
+def export_tum(result: ReplayResult, path: str | Path) -> list[Path]:
+    """Write the estimated trajectory (the start and the pose after each step, t = 0..steps) to ``path`` as a
+    TUM file and, when the true poses are known (a simulated drive; course files have none), the true one to
+    :func:`true_path_name`. The course format has no clock, so a step is one second: the timestamp is the step.
+    """
+    from ..data.tum import write_tum
+
+    timestamps = np.arange(result.steps + 1, dtype=float)
+    written = [write_tum(path, timestamps, result.est_path[: result.steps + 1])]
+    if result.true_poses is not None:
+        written.append(write_tum(true_path_name(path), timestamps, result.true_poses[: result.steps + 1]))
+    return written
