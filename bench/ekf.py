@@ -1,4 +1,4 @@
-"""Benchmark: the fast EKF-SLAM against the seed's full-matrix form, the running log det against slogdet, and
+"""Benchmark: the fast EKF-SLAM against the course's full-matrix form, the running log det against slogdet, and
 the cost of the filter's variants (FEJ, iterated) per step relative to the EKF.
 
     OPENBLAS_NUM_THREADS=1 python bench/ekf.py [--sizes 10 50 100 200 400 500] [--variant-sizes 30 200]

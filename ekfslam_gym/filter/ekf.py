@@ -186,6 +186,8 @@ class EKFSLAM:
         self._observed = np.zeros(self.n_landmarks, dtype=bool)
         self._model_code = _MODEL_CODES[motion_model]
         self._variant_code = _VARIANT_CODES[variant]
+        self._fej = variant == "fej"
+        self._width = _CONTROL_WIDTH[motion_model]
         # First estimates: the pose as the last prediction left it, each landmark as it was initialised.
         self._prior_pose = self._mean[:3].copy()
         self._first = np.zeros((self.n_landmarks, 2))
@@ -284,7 +286,7 @@ class EKFSLAM:
         constructor's ``motion_noise``.
         """
         control = np.asarray(control, dtype=float)
-        width = _CONTROL_WIDTH[self.motion_model]
+        width = self._width
         if control.shape != (width,):
             raise ValueError(
                 f"control must be {width} numbers for the {self.motion_model} model, got {control!r}"
@@ -302,8 +304,8 @@ class EKFSLAM:
             in_control_space = False
         delta, status = compiled.predict(
             self._mean, self._cov, self._P, self._model_code, self._control, self.dt, self.wheel_base,
-            np.ascontiguousarray(noise, dtype=np.float64), in_control_space, self._tracking, self._prior_pose,
-            self._variant_code == codes.VARIANT_FEJ, self._G_used,
+            np.ascontiguousarray(noise), in_control_space, self._tracking, self._prior_pose, self._fej,
+            self._G_used,
         )  # fmt: skip
         if status == codes.BAD_INPUT:
             raise ValueError(f"control and its noise must be finite, got {control!r}")
