@@ -1,9 +1,12 @@
-"""Benchmark: the fast EKF-SLAM against the seed's full-matrix form, and the running log det against slogdet.
+"""Benchmark: the fast EKF-SLAM against the course's full-matrix form, the running log det against slogdet, and
+the cost of the filter's variants (FEJ, iterated) per step relative to the EKF.
 
-    OPENBLAS_NUM_THREADS=1 python bench/ekf.py [--sizes 10 50 100 200 400 500] [--budget 0.5]
+    OPENBLAS_NUM_THREADS=1 python bench/ekf.py [--sizes 10 50 100 200 400 500] [--variant-sizes 30 200]
+        [--budget 0.5]
 
 Every figure is a ratio of two timings taken in this one run (best of several repeats), 4 readings per step,
 batch update. The full-matrix form builds dense G, F_x,j and H and applies (I - K H) Sigma, as the course's lecture notes write it.
+A variant's step is ``EKFSLAM.predict`` + ``correct`` through the Python wrapper, as the env calls them.
 """
 
 from __future__ import annotations
@@ -22,6 +25,9 @@ from numba import njit  # noqa: E402
 
 from ekfslam_gym.filter import EKFSLAM, odometry_motion, range_bearing, wrap_angle  # noqa: E402
 from ekfslam_gym.filter import kernels as kernels  # noqa: E402
+from ekfslam_gym.filter.codes import MODEL_ODOMETRY, VARIANT_EKF  # noqa: E402
+
+VARIANTS = ("ekf", "fej", "iekf")
 
 READINGS_PER_STEP = 4
 
@@ -89,9 +95,9 @@ def best_time(fn, budget: float, min_repeats: int = 3) -> float:
     return best
 
 
-def setup(n_landmarks: int, rng: np.random.Generator):
+def setup(n_landmarks: int, rng: np.random.Generator, variant: str = "ekf"):
     ekf = EKFSLAM(n_landmarks, init_mode="inverse", pose_prior=1e-4, measurement_noise=np.diag([0.01, 0.001]),
-                  resync_every=0)  # fmt: skip
+                  resync_every=0, variant=variant)  # fmt: skip
     for start in range(0, n_landmarks, READINGS_PER_STEP):
         ids = np.arange(start, min(start + READINGS_PER_STEP, n_landmarks))
         ekf.correct(ids, np.column_stack([rng.uniform(1, 5, ids.size), rng.uniform(-2, 2, ids.size)]))
@@ -116,12 +122,16 @@ def measure(n: int, rng: np.random.Generator, budget: float) -> dict:
         cov[:] = base_cov
         P[:] = base_P
 
+    prior, first, G_used = mean[:3].copy(), ekf._first.copy(), np.eye(3)
+    H_used, H_slots = np.zeros((len(ids), 2, 5)), np.zeros(len(ids), dtype=np.int64)
+
     def fast_predict():
-        kernels.predict(mean, cov, P, kernels.MODEL_ODOMETRY, control, 0.1, R, False, True)
+        kernels.predict(mean, cov, P, MODEL_ODOMETRY, control, 0.1, 0.3, R, False, True, prior, False, G_used)
 
     def fast_correct():
         restore()
-        kernels.correct(mean, cov, P, observed, ids, z, Q, 1e-3, False, False, True)
+        kernels.correct(mean, cov, P, observed, ids, z, Q, 1e-3, False, False, True, VARIANT_EKF, 1, prior, first,
+                        H_used, H_slots)  # fmt: skip
 
     k = 2 * READINGS_PER_STEP
     S_factor = np.linalg.cholesky(np.eye(k) + 0.1)
@@ -141,16 +151,48 @@ def measure(n: int, rng: np.random.Generator, budget: float) -> dict:
     )
 
 
+def variant_costs(n: int, budget: float, rounds: int = 5) -> dict[str, float]:
+    """Best seconds per filter step (predict + correct of 4 readings) of each variant at n landmarks, from the
+    same state and readings (the iterated correction stops when a Gauss-Newton step moves nothing by 1e-9).
+    The variants are timed in turns, ``rounds`` times, keeping each one's best, so a load that comes and goes
+    on a shared machine hits them alike; the state's restoration, timed alike, is subtracted."""
+    control = np.array([0.01, 0.1, -0.01])
+    steps, restores = {}, {}
+    for variant in VARIANTS:
+        ekf, ids, z = setup(n, np.random.default_rng(n), variant)
+        saved = [a.copy() for a in (ekf._mean, ekf._cov, ekf._P, ekf._prior_pose)]
+
+        def restore(ekf=ekf, saved=saved):
+            for target, source in zip((ekf._mean, ekf._cov, ekf._P, ekf._prior_pose), saved):
+                target[...] = source
+
+        def step(ekf=ekf, restore=restore, ids=ids, z=z):
+            restore()
+            ekf.predict(control)
+            ekf.correct(ids, z)
+
+        steps[variant], restores[variant] = step, restore
+    best = dict.fromkeys(VARIANTS, math.inf)
+    best_restore = dict.fromkeys(VARIANTS, math.inf)
+    share = budget / (2 * rounds)
+    for _ in range(rounds):
+        for variant in VARIANTS:
+            best[variant] = min(best[variant], best_time(steps[variant], share))
+            best_restore[variant] = min(best_restore[variant], best_time(restores[variant], share))
+    return {v: max(best[v] - best_restore[v], 1e-9) for v in VARIANTS}
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--sizes", type=int, nargs="+", default=[10, 50, 100, 200, 400, 500])
+    parser.add_argument("--variant-sizes", type=int, nargs="+", default=[30, 200])
     parser.add_argument("--budget", type=float, default=0.5, help="seconds of timing per measurement")
     parser.add_argument("--smoke", action="store_true", help="tiny sizes: a check that the script runs")
     args = parser.parse_args(argv)
     if args.smoke:
-        args.sizes, args.budget = [10, 50], 0.01
+        args.sizes, args.variant_sizes, args.budget = [10, 50], [10], 0.01
     rng = np.random.default_rng(0)
     rows = [measure(n, rng, args.budget) for n in args.sizes]
 
@@ -185,6 +227,11 @@ def main(argv=None) -> None:
             f"running log det {r['slogdet'] / r['book']:.0f}x faster than slogdet; a whole filter step "
             f"with the running log det costs {(step + r['slogdet']) / step:.1f}x less than the same step plus slogdet"
         )
+    print(f"variants, one step (predict + correct, {READINGS_PER_STEP} readings) relative to the EKF's:")
+    for n in args.variant_sizes:
+        costs = variant_costs(n, args.budget)
+        ratios = "  ".join(f"{v} {costs[v] / costs['ekf']:.2f}x" for v in VARIANTS)
+        print(f"{n:>9} landmarks: ekf {costs['ekf'] * us:.1f} us/step; {ratios}")
 
 
 if __name__ == "__main__":

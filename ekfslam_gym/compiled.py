@@ -29,12 +29,13 @@ KERNELS: dict[str, tuple[str, str, str]] = {
     "predict": (
         "ekfslam_gym.filter.kernels",
         "predict",
-        f"Tuple((f8, i8))({_F8_1}, {_F8_2}, {_F8_2}, i8, {_F8_1}, f8, {_F8_2}, b1, b1)",
+        f"Tuple((f8, i8))({_F8_1}, {_F8_2}, {_F8_2}, i8, {_F8_1}, f8, f8, {_F8_2}, b1, b1, {_F8_1}, b1, {_F8_2})",
     ),
     "correct": (
         "ekfslam_gym.filter.kernels",
         "correct",
-        f"Tuple((f8, i8, i8))({_F8_1}, {_F8_2}, {_F8_2}, b1[::1], i8[::1], {_F8_2}, {_F8_2}, f8, b1, b1, b1)",
+        f"Tuple((f8, i8, i8))({_F8_1}, {_F8_2}, {_F8_2}, b1[::1], i8[::1], {_F8_2}, {_F8_2}, f8, b1, b1, b1, "
+        f"i8, i8, {_F8_1}, {_F8_2}, f8[:, :, ::1], i8[::1])",
     ),
     "min_wall_distance": ("ekfslam_gym.sim.geometry", "min_wall_distance", f"{_F8_1}({_F8_2}, {_F8_2})"),
     "visible_landmarks": (
@@ -78,6 +79,11 @@ KERNELS: dict[str, tuple[str, str, str]] = {
         "ekfslam_gym.envs.kernels",
         "step_metrics",
         f"Tuple((f8, f8, i8, f8, i8))({_F8_1}, {_F8_2}, b1[::1], UniTuple(f8, 3), {_F8_2}, i8[::1], i8[::1], i8, i8)",
+    ),
+    "wheel_reading": (
+        "ekfslam_gym.sim.odometry_kernels",
+        "wheel_reading",
+        f"void({_F8_2}, f8, f8, {_F8_1}, {_F8_1}, {_F8_1}, {_F8_2}, {_F8_1})",
     ),
 }
 

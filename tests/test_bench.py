@@ -9,6 +9,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 EXPECTED = {
+    "consistency.py": "median ANEES",
     "decisions.py": "time per act() call",
     "ekf.py": "landmarks",
     "env.py": "CartPole-v1",

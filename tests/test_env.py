@@ -156,6 +156,10 @@ def test_step_before_reset_is_an_error():
         (dict(filter={"landmark_prior": "big"}), "filter.landmark_prior"),
         (dict(max_episode_steps=0), "max_episode_steps"),
         (dict(observation={"kind": "image"}), "observation.kind"),
+        (dict(filter={"motion_model": "tracks"}), "filter.motion_model"),
+        (dict(filter={"variant": "ukf"}), "filter.variant"),
+        (dict(filter={"iterations": 0}), "filter.iterations"),
+        (dict(filter={"iterations": 2.5}), "filter.iterations"),
     ],
 )
 def test_bad_configs_raise_errors_naming_the_field(overrides, field):
@@ -606,3 +610,94 @@ def test_two_different_step_limits_are_an_error_and_no_time_limit_leaves_the_env
     assert flags == [False] * 8 + [True] and left[-1] == 0.0
     direct = EKFSLAMEnv(max_episode_steps=9)  # no gym.make: the config alone
     assert run_to_truncation(direct, 20)[1] == [False] * 8 + [True]
+
+
+FILTER_SETTINGS = [
+    {"variant": "ekf"},
+    {"variant": "fej"},
+    {"variant": "iekf", "iterations": 3},
+    {"motion_model": "wheels"},
+    {"motion_model": "wheels", "variant": "fej"},
+    {"motion_model": "velocity", "variant": "iekf"},
+]
+
+
+@pytest.mark.parametrize("settings", FILTER_SETTINGS, ids=lambda s: "-".join(map(str, s.values())))
+def test_every_filter_variant_and_motion_model_runs_and_passes_the_checker(settings):
+    """The env builds its filter from ``filter.variant``/``iterations``/``motion_model``, reads the matching
+    odometry, and its info["log_det"] is the exact log det of the filter's covariance throughout."""
+    from gymnasium.utils.env_checker import check_env
+
+    env = gym.make("EKFSLAM-v0", filter=settings, max_episode_steps=60)
+    check_env(env.unwrapped, skip_render_check=True)
+    _, info = env.reset(seed=3)
+    ekf = env.unwrapped.filter  # a new filter at every reset
+    assert ekf.variant == settings.get("variant", "ekf")
+    assert ekf.motion_model == settings.get("motion_model", "odometry")
+    assert ekf.iterations == settings.get("iterations", 5)
+    width = 2 if ekf.motion_model == "velocity" else 3
+    rng = np.random.default_rng(3)
+    for t in range(60):
+        assert info["log_det"] == pytest.approx(np.linalg.slogdet(ekf.cov)[1], abs=1e-8), t
+        _, _, terminated, truncated, info = env.step(rng.uniform(-1, 1, 2).astype(np.float32))
+        assert info["odometry"].shape == (width,) and info["odometry_cov"].shape == (width, width)
+        assert not info["filter_failed"] and np.isfinite(info["pose_nees"])
+        if terminated or truncated:
+            break
+    assert t == 59
+    env.close()
+
+
+def test_wheels_filter_takes_the_worlds_wheel_base_and_reads_wheel_odometry():
+    env = EKFSLAMEnv(filter={"motion_model": "wheels"})
+    env.reset(seed=5)
+    assert env.filter.wheel_base == env.world.wheel_noise.wheel_base
+    for _ in range(3):
+        *_, info = env.step(np.array([0.8, 0.5], dtype=np.float32))
+    left, right, slip = info["odometry"]
+    before, after = env.world.last_motion
+    # the wheels' travels (m) within a few of their standard deviations (1e-3 m here) of the true turn and
+    # the commanded travel; in free space no slip beyond its floor
+    assert (right - left) / env.filter.wheel_base == pytest.approx(after[2] - before[2], abs=0.02)
+    assert 0.5 * (left + right) == pytest.approx(0.8 * 0.1, abs=0.005)
+    assert abs(slip) < 1e-4
+
+
+@pytest.mark.parametrize("motion_model", ["odometry", "velocity", "wheels"])
+def test_greedy_planner_drives_with_every_motion_model(motion_model):
+    """The greedy planner rolls the env's filter forward with the primitives' controls in the filter's own
+    motion model: every model's controls move the filter along the same arc."""
+    from agents import GreedyInfoGainAgent
+    from agents.greedy import primitive_controls
+
+    env = gym.make("EKFSLAM-v0", filter={"motion_model": motion_model}, max_episode_steps=15)
+    observation, _ = env.reset(seed=2)
+    agent = GreedyInfoGainAgent()
+    agent.reset(env, seed=2)
+    for _ in range(15):
+        action = agent.act(observation)
+        assert action.shape == (2,) and np.all(np.abs(action) <= 1)
+        observation, _, terminated, truncated, info = env.step(action)
+        assert not info["filter_failed"]
+        if terminated or truncated:
+            break
+    unwrapped = env.unwrapped
+    noise = {
+        "odometry": unwrapped.config.odometry,
+        "velocity": unwrapped.world.velocity_noise,
+        "wheels": unwrapped.world.wheel_noise,
+    }[motion_model]
+    controls, covs, poses = primitive_controls(0.8, 1.2, 0.1, 4, motion_model, noise)
+    ekf = unwrapped.filter.copy()
+    start = ekf.pose.copy()
+    for control, cov in zip(controls, covs):
+        ekf.predict(control, control_cov=cov)
+    c, s = math.cos(start[2]), math.sin(start[2])
+    expected = start + [
+        c * poses[-1, 0] - s * poses[-1, 1],
+        s * poses[-1, 0] + c * poses[-1, 1],
+        poses[-1, 2],
+    ]
+    expected[2] = (expected[2] + math.pi) % (2 * math.pi) - math.pi
+    np.testing.assert_allclose(ekf.pose, expected, atol=1e-12)
+    env.close()

@@ -10,6 +10,7 @@ from ekfslam_gym.filter.models import (
     odometry_motion,
     range_bearing,
     velocity_motion,
+    wheel_motion,
     wrap_angle,
 )
 
@@ -129,3 +130,46 @@ def test_wrap_angle_range():
         assert -math.pi < w <= math.pi
         assert math.isclose(math.sin(w), math.sin(a), abs_tol=1e-12)
         assert math.isclose(math.cos(w), math.cos(a), abs_tol=1e-12)
+
+
+WHEEL_BASE = 0.3
+
+
+@pytest.mark.parametrize("pose", POSES)
+@pytest.mark.parametrize(
+    "control",
+    [
+        (0.05, 0.05, 0.0),  # straight ahead
+        (-0.04, -0.04, 0.002),  # backward, with a little slip
+        (-0.015, 0.015, 0.0),  # turning in place
+        (0.03, 0.07, -0.01),  # an arc and a slide
+        (0.02, 0.02 + 1e-5, 0.0),  # a turn of 3e-5 rad: the sinc series
+        (0.01, 0.01, 0.04),  # sliding sideways along a wall
+    ],
+)
+def test_wheel_motion_jacobians(pose, control):
+    _, G, V = wheel_motion(pose, *control, WHEEL_BASE)
+    G_num = numeric_jacobian(lambda p: wheel_motion(p, *control, WHEEL_BASE)[0], pose, angle_rows=(2,))
+    V_num = numeric_jacobian(
+        lambda c: wheel_motion(pose, c[0], c[1], c[2], WHEEL_BASE)[0], control, angle_rows=(2,)
+    )
+    np.testing.assert_allclose(G, G_num, atol=1e-7)
+    np.testing.assert_allclose(V, V_num, atol=1e-7)
+
+
+def test_wheel_motion_is_the_arc_of_the_velocity_model_plus_the_slip():
+    """Without slip the wheels model is the velocity model with v dt = (l + r)/2, omega dt = (r - l)/b; the
+    slip moves the pose sideways, perpendicular to the mid-heading, and leaves the heading alone."""
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        pose = rng.uniform(-3, 3, 3)
+        left, right = rng.uniform(-0.1, 0.1, 2)
+        moved, _, _ = wheel_motion(pose, left, right, 0.0, WHEEL_BASE)
+        arc, _, _ = velocity_motion(pose, 0.5 * (left + right) / 0.1, (right - left) / WHEEL_BASE / 0.1, 0.1)
+        np.testing.assert_allclose(moved, arc, atol=1e-12)
+        slid, _, _ = wheel_motion(pose, left, right, 0.03, WHEEL_BASE)
+        mid = pose[2] + 0.5 * (right - left) / WHEEL_BASE
+        np.testing.assert_allclose(
+            slid[:2] - moved[:2], 0.03 * np.array([-math.sin(mid), math.cos(mid)]), atol=1e-12
+        )
+        assert slid[2] == moved[2]

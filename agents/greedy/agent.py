@@ -82,7 +82,9 @@ class GreedyInfoGainAgent(Agent):
         self._scan_max = sensor.scan_max_range
         self._angles = beam_angles(sensor.n_beams)
         self._safe = cfg.robot.radius + self.clearance
-        noise = cfg.odometry if ekf.motion_model == "odometry" else u.world.velocity_noise
+        noise = {"odometry": cfg.odometry, "velocity": u.world.velocity_noise, "wheels": u.world.wheel_noise}[
+            ekf.motion_model
+        ]
         self._plans = []
         for v, w in self.primitives:
             controls, covs, rel = primitive_controls(

@@ -11,7 +11,7 @@ import numpy as np
 
 from ekfslam_gym.angles import wrap_angles
 from ekfslam_gym.envs.actions import PRIMITIVES
-from ekfslam_gym.sim.odometry import odometry_std, velocity_std
+from ekfslam_gym.sim.odometry import odometry_std, velocity_std, wheel_std
 
 DEFAULT_PRIMITIVES = PRIMITIVES  # the env's own set, so a primitives policy and the planner choose alike
 
@@ -24,13 +24,20 @@ def primitive_controls(
     ``v`` (m/s) and ``omega`` (rad/s) held for ``horizon`` steps of ``dt`` s trace an arc; in free space the
     robot tracks the command exactly, so each step's true odometry is (omega dt / 2, chord, omega dt / 2)
     with chord = v dt sinc(omega dt / 2), and its covariance is the simulator's alpha model at that motion.
-    ``noise`` is the env's ``OdometryNoise`` (or the world's ``VelocityNoise`` for the velocity model).
+    ``noise`` is the env's ``OdometryNoise`` (or the world's ``VelocityNoise`` for the velocity model, its
+    ``WheelOdometryNoise`` for the wheels model: wheel travels v dt -+ b omega dt / 2 on the base b, no slip
+    and no wall contact).
     """
     half = 0.5 * omega * dt
     chord = v * dt * (math.sin(half) / half if abs(half) > 1e-9 else 1.0)
     if motion_model == "odometry":
         std = np.asarray(odometry_std(half, chord, half, noise.vector))
         control = np.array([half, chord, half])
+    elif motion_model == "wheels":
+        left = v * dt - noise.wheel_base * half
+        right = v * dt + noise.wheel_base * half
+        std = np.asarray(wheel_std(left, right, 0.0, noise.vector))
+        control = np.array([left, right, 0.0])
     else:
         std = np.asarray(velocity_std(v, omega, noise.vector))
         control = np.array([v, omega])

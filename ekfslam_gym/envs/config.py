@@ -73,14 +73,21 @@ class WorldConfig:
 class FilterConfig:
     """The EKF-SLAM inside the env.
 
-    motion_model: ``odometry`` (exact for any planar step, the default) or ``velocity``. init_mode: ``inverse``
-    (the standard for a simulated robot) or ``course``. landmark_prior: variance (m^2) at which every unseen
-    landmark is carried, so log det Sigma is finite and discovering a landmark pays a bounded amount.
-    pose_prior: initial pose variance (m^2 and rad^2; small and positive, so Sigma_0 is definite).
-    resync_every: filter calls between exact Cholesky re-synchronisations of the running log det.
+    motion_model: ``odometry`` (turn-drive-turn, exact for any planar step, the default), ``velocity``
+    (v, omega) or ``wheels`` (wheel-encoder travels with a sideways slip, which reads a slide along a wall as a
+    slip rather than as large turns; the simulator's default ``WheelOdometryNoise``). variant: where the
+    filter linearises: ``ekf`` (the default), ``fej`` (first-estimates Jacobians, Huang, Mourikis &
+    Roumeliotis 2010: no spurious information about the unobservable global pose) or ``iekf`` (the correction
+    iterated by Gauss-Newton, at most ``iterations`` linearisations); all keep the exact running log det.
+    init_mode: ``inverse`` (the standard for a simulated robot) or ``course``. landmark_prior: variance (m^2) at
+    which every unseen landmark is carried, so log det Sigma is finite and discovering a landmark pays a
+    bounded amount. pose_prior: initial pose variance (m^2 and rad^2; small and positive, so Sigma_0 is
+    definite). resync_every: filter calls between exact Cholesky re-synchronisations of the running log det.
     """
 
     motion_model: str = "odometry"
+    variant: str = "ekf"
+    iterations: int = 5
     init_mode: str = "inverse"
     update: str = "batch"
     landmark_prior: float = 100.0
@@ -88,7 +95,11 @@ class FilterConfig:
     resync_every: int = 1000
 
     def __post_init__(self) -> None:
-        _require(self.motion_model in ("odometry", "velocity"), "filter.motion_model", "must be odometry|velocity", self.motion_model)  # fmt: skip
+        _require(self.motion_model in ("odometry", "velocity", "wheels"), "filter.motion_model", "must be odometry|velocity|wheels", self.motion_model)  # fmt: skip
+        _require(
+            self.variant in ("ekf", "fej", "iekf"), "filter.variant", "must be ekf|fej|iekf", self.variant
+        )
+        _integer("filter.iterations", self.iterations, 1)
         _require(
             self.init_mode in ("inverse", "course"),
             "filter.init_mode",

@@ -93,8 +93,9 @@ class EKFSLAMEnv(gym.Env):
     ``gymnasium.make("EKFSLAM-v0", config=None, render_mode=None, **overrides)``: ``config`` is an
     ``EnvConfig``, a path to a YAML file (see ``configs/env/``) or a mapping of sections, and replaces the id's
     preset; ``overrides`` are sections given as keyword arguments, applied on top of it, e.g.
-    ``world={"n_landmarks": 50}, reward={"collision": 2.0}``. A bad value raises ``ValueError`` naming the
-    field. ``max_episode_steps`` given to ``gym.make`` is ``gym.make``'s own argument (see Episode End); given
+    ``world={"n_landmarks": 50}, reward={"collision": 2.0}``; the filter's odometry model and linearisation
+    are ``filter={"motion_model": "wheels", "variant": "fej"}`` (see ``FilterConfig``). A bad value raises
+    ``ValueError`` naming the field. ``max_episode_steps`` given to ``gym.make`` is ``gym.make``'s own argument (see Episode End); given
     to ``EKFSLAMEnv(...)`` directly it is a config override.
 
     After ``reset``, agents and evaluation read the belief through public, read-only views: ``filter``
@@ -184,6 +185,7 @@ class EKFSLAMEnv(gym.Env):
             layout.n_landmarks, motion_model=f.motion_model, dt=cfg.dt, measurement_noise=cfg.sensor.cov,
             landmark_prior=f.landmark_prior, pose_prior=f.pose_prior, init_mode=f.init_mode, update=f.update,
             initial_pose=layout.start, min_range=max(cfg.sensor.min_range, 1e-3), resync_every=f.resync_every,
+            variant=f.variant, iterations=f.iterations, wheel_base=self._world.wheel_noise.wheel_base,
         )  # fmt: skip
         self._bounds = np.asarray(layout.bounds, dtype=np.float64)
         self._true_landmarks = np.ascontiguousarray(layout.landmarks, dtype=np.float64)
@@ -209,7 +211,7 @@ class EKFSLAMEnv(gym.Env):
         self._trace = float(np.trace(cov)) if weights.a_opt else 0.0
         self._lambda_max = self._largest_eigenvalue(cov) if weights.e_opt else 0.0
         self._last_readings = readings
-        self._odometry = np.zeros(3 if f.motion_model == "odometry" else 2)
+        self._odometry = np.zeros(2 if f.motion_model == "velocity" else 3)
         self._odometry_cov = np.zeros((self._odometry.size, self._odometry.size))
         self._newly_covered = self._mark_and_trail()
         nees, rmse, _, self._worst_variance, seen = compiled.step_metrics(
@@ -281,7 +283,13 @@ class EKFSLAMEnv(gym.Env):
         x1, y1, _ = world.pose_tuple
         self._path_length += math.hypot(x1 - x0, y1 - y0)
         self._collisions += collided
-        odometry = world.odometry(rng) if ekf.motion_model == "odometry" else world.velocity_odometry(rng)
+        model = ekf.motion_model
+        if model == "odometry":
+            odometry = world.odometry(rng)
+        elif model == "wheels":
+            odometry = world.wheel_odometry(rng)
+        else:
+            odometry = world.velocity_odometry(rng)
         readings = world.sense(rng)
         self._odometry, self._odometry_cov, self._last_readings = odometry.u, odometry.cov, readings
         self._t += 1

@@ -3,21 +3,30 @@
 Knows nothing of the simulator or the env; ``ekfslam_gym.graph`` is the offline least-squares back end.
 """
 
-from .ekf import COURSE_MEASUREMENT_NOISE, COURSE_MOTION_NOISE, EKFSLAM, FilterDivergedError
+from .ekf import COURSE_MEASUREMENT_NOISE, COURSE_MOTION_NOISE, EKFSLAM, FilterDivergedError, Jacobians
 
 __all__ = [
     "COURSE_MEASUREMENT_NOISE",
     "COURSE_MOTION_NOISE",
     "EKFSLAM",
     "FilterDivergedError",
+    "Jacobians",
     "inverse_range_bearing",
     "odometry_motion",
     "range_bearing",
     "velocity_motion",
+    "wheel_motion",
     "wrap_angle",
 ]
 
-_MODELS = ("inverse_range_bearing", "odometry_motion", "range_bearing", "velocity_motion", "wrap_angle")
+_MODELS = (
+    "inverse_range_bearing",
+    "odometry_motion",
+    "range_bearing",
+    "velocity_motion",
+    "wheel_motion",
+    "wrap_angle",
+)
 
 
 def __getattr__(name: str):

@@ -2,7 +2,8 @@
 compile-time constants, and the wrapper needs them without loading numba).
 
 Status: OK, NOT_PD (an innovation covariance not positive definite), BAD_ID (a landmark index outside
-[0, n)), BAD_INPUT (a non-finite control, noise or reading). Motion models: odometry, velocity.
+[0, n)), BAD_INPUT (a non-finite control, noise or reading). Motion models: odometry, velocity, wheels.
+Variants: the standard EKF, first-estimates Jacobians (FEJ), the iterated correction (IEKF).
 """
 
 OK = 0
@@ -12,3 +13,8 @@ BAD_INPUT = 3
 
 MODEL_ODOMETRY = 0
 MODEL_VELOCITY = 1
+MODEL_WHEELS = 2
+
+VARIANT_EKF = 0
+VARIANT_FEJ = 1
+VARIANT_IEKF = 2

@@ -9,7 +9,7 @@ every ``resync_every`` filter calls to bound rounding drift).
 from __future__ import annotations
 
 import copy
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 
@@ -20,9 +20,31 @@ from . import codes
 COURSE_MOTION_NOISE = np.diag([0.1, 0.1, 0.01])
 COURSE_MEASUREMENT_NOISE = 0.01 * np.eye(2)
 
-MotionModel = Literal["odometry", "velocity"]
+MotionModel = Literal["odometry", "velocity", "wheels"]
 InitMode = Literal["course", "inverse"]
 UpdateMode = Literal["batch", "sequential"]
+Variant = Literal["ekf", "fej", "iekf"]
+
+_MODEL_CODES = {
+    "odometry": codes.MODEL_ODOMETRY,
+    "velocity": codes.MODEL_VELOCITY,
+    "wheels": codes.MODEL_WHEELS,
+}
+_CONTROL_WIDTH = {"odometry": 3, "velocity": 2, "wheels": 3}
+_VARIANT_CODES = {"ekf": codes.VARIANT_EKF, "fej": codes.VARIANT_FEJ, "iekf": codes.VARIANT_IEKF}
+
+
+class Jacobians(NamedTuple):
+    """The Jacobians the filter last linearised with, as its variant chose them (for observability analysis).
+
+    motion: G (3, 3) of the last prediction. slots (k,): the landmarks of the k readings used by the last
+    correction, in the order used; measurement (k, 2, 5): d reading / d (x, y, theta, landmark x, landmark y)
+    for each. Copies.
+    """
+
+    motion: np.ndarray
+    slots: np.ndarray
+    measurement: np.ndarray
 
 
 class FilterDivergedError(RuntimeError):
@@ -57,9 +79,21 @@ class EKFSLAM:
 
     Args:
         n_landmarks: number of landmark slots (fixed; readings name them by 0-based index).
-        motion_model: ``"odometry"`` (control (rot1, trans, rot2), Thrun et al. table 5.6) or ``"velocity"`` (control
-            (v, omega) applied for ``dt`` seconds, Thrun et al. table 5.3).
+        motion_model: ``"odometry"`` (control (rot1, trans, rot2), Thrun et al. table 5.6), ``"velocity"``
+            (control (v, omega) applied for ``dt`` seconds, Thrun et al. table 5.3) or ``"wheels"`` (control (left, right, slip): wheel
+            travels and a sideways slip in metres, ``models.wheel_motion``).
         dt: control period in seconds for the velocity model.
+        wheel_base: metres between the wheels, for the wheels model (the odometer's, e.g.
+            ``WheelOdometryNoise.wheel_base``).
+        variant: where the Jacobians are taken. ``"ekf"``: at the current estimate. ``"fej"``: first-estimates
+            Jacobians (Huang, Mourikis & Roumeliotis, "Observability-based rules for designing consistent EKF
+            SLAM estimators", IJRR 2010): the measurement Jacobians at the pose's prediction and each
+            landmark's first estimate, the motion Jacobian from the previous prediction, so the linearised
+            system keeps the three unobservable directions of planar SLAM (global x, y, rotation) instead of
+            gaining spurious information about the rotation. ``"iekf"``: the correction relinearised by
+            Gauss-Newton up to ``iterations`` times (Bell & Cathey 1993), the covariance updated once at the
+            end. All keep the exact running log det and the O(m N^2) correction.
+        iterations: linearisations per correction for ``"iekf"`` (1 is the plain EKF).
         motion_noise: R, the pose-space noise added at every prediction (3x3, a (3,) diagonal or a scalar);
             default the course's diag(0.1, 0.1, 0.01). ``predict`` can override it per step, in pose space or
             in control space (R = V M V^T).
@@ -85,6 +119,9 @@ class EKFSLAM:
         *,
         motion_model: MotionModel = "odometry",
         dt: float = 0.1,
+        wheel_base: float = 0.3,
+        variant: Variant = "ekf",
+        iterations: int = 5,
         motion_noise=COURSE_MOTION_NOISE,
         measurement_noise=COURSE_MEASUREMENT_NOISE,
         landmark_prior: float = 1000.0,
@@ -97,8 +134,14 @@ class EKFSLAM:
     ) -> None:
         if isinstance(n_landmarks, bool) or not isinstance(n_landmarks, (int, np.integer)) or n_landmarks < 0:
             raise ValueError(f"n_landmarks must be a non-negative integer, got {n_landmarks!r}")
-        if motion_model not in ("odometry", "velocity"):
-            raise ValueError(f"motion_model must be 'odometry' or 'velocity', got {motion_model!r}")
+        if motion_model not in _MODEL_CODES:
+            raise ValueError(f"motion_model must be one of {sorted(_MODEL_CODES)}, got {motion_model!r}")
+        if variant not in _VARIANT_CODES:
+            raise ValueError(f"variant must be one of {sorted(_VARIANT_CODES)}, got {variant!r}")
+        if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 1:
+            raise ValueError(f"iterations must be an integer >= 1, got {iterations!r}")
+        if not (np.isfinite(wheel_base) and wheel_base > 0):
+            raise ValueError(f"wheel_base must be a positive number of metres, got {wheel_base!r}")
         if init_mode not in ("course", "inverse"):
             raise ValueError(f"init_mode must be 'course' or 'inverse', got {init_mode!r}")
         if update not in ("batch", "sequential"):
@@ -115,6 +158,9 @@ class EKFSLAM:
         self.n_landmarks = int(n_landmarks)
         self.motion_model: MotionModel = motion_model
         self.dt = float(dt)
+        self.wheel_base = float(wheel_base)
+        self.variant: Variant = variant
+        self.iterations = int(iterations)
         self.init_mode: InitMode = init_mode
         self.update_mode: UpdateMode = update
         self.min_range = float(min_range)
@@ -138,7 +184,18 @@ class EKFSLAM:
         idx = np.arange(3, size)
         self._cov[idx, idx] = self.landmark_prior
         self._observed = np.zeros(self.n_landmarks, dtype=bool)
-        self._model_code = codes.MODEL_ODOMETRY if motion_model == "odometry" else codes.MODEL_VELOCITY
+        self._model_code = _MODEL_CODES[motion_model]
+        self._variant_code = _VARIANT_CODES[variant]
+        self._fej = variant == "fej"
+        self._width = _CONTROL_WIDTH[motion_model]
+        # First estimates: the pose as the last prediction left it, each landmark as it was initialised.
+        self._prior_pose = self._mean[:3].copy()
+        self._first = np.zeros((self.n_landmarks, 2))
+        # The Jacobians last used (see ``Jacobians``), written by the kernels.
+        self._G_used = np.eye(3)
+        self._H_used = np.zeros((max(16, self.n_landmarks), 2, 5))
+        self._H_slots = np.zeros(self._H_used.shape[0], dtype=np.int64)
+        self._n_used = 0
         self._control = np.zeros(3)
         self._P = np.zeros((3, 3))
         self._log_det = -np.inf
@@ -209,6 +266,12 @@ class EKFSLAM:
         out[:, 1, 0] = off
         return out
 
+    @property
+    def last_jacobians(self) -> Jacobians:
+        """The Jacobians of the last prediction and correction, as this variant took them."""
+        k = self._n_used
+        return Jacobians(self._G_used.copy(), self._H_slots[:k].copy(), self._H_used[:k].copy())
+
     def copy(self) -> EKFSLAM:
         """An independent copy (for planners that simulate the filter forward)."""
         return copy.deepcopy(self)
@@ -217,12 +280,13 @@ class EKFSLAM:
     def predict(self, control, *, motion_cov=None, control_cov=None) -> float:
         """Prediction with the motion model; returns the change of log det Sigma.
 
-        ``control`` is (rot1, trans, rot2) for the odometry model or (v, omega) for the velocity model.
-        Noise: ``motion_cov`` (pose space, 3x3) or ``control_cov`` (control space: 3x3 odometry, 2x2 velocity,
-        mapped through V M V^T); neither means the constructor's ``motion_noise``.
+        ``control`` is (rot1, trans, rot2) for the odometry model, (v, omega) for the velocity model or
+        (left, right, slip) for the wheels model. Noise: ``motion_cov`` (pose space, 3x3) or ``control_cov``
+        (control space: 3x3 odometry and wheels, 2x2 velocity, mapped through V M V^T); neither means the
+        constructor's ``motion_noise``.
         """
         control = np.asarray(control, dtype=float)
-        width = 3 if self._model_code == codes.MODEL_ODOMETRY else 2
+        width = self._width
         if control.shape != (width,):
             raise ValueError(
                 f"control must be {width} numbers for the {self.motion_model} model, got {control!r}"
@@ -239,8 +303,9 @@ class EKFSLAM:
                 raise ValueError(f"motion_cov must be (3, 3), got {noise.shape}")
             in_control_space = False
         delta, status = compiled.predict(
-            self._mean, self._cov, self._P, self._model_code, self._control, self.dt,
-            np.ascontiguousarray(noise), in_control_space, self._tracking,
+            self._mean, self._cov, self._P, self._model_code, self._control, self.dt, self.wheel_base,
+            np.ascontiguousarray(noise), in_control_space, self._tracking, self._prior_pose, self._fej,
+            self._G_used,
         )  # fmt: skip
         if status == codes.BAD_INPUT:
             raise ValueError(f"control and its noise must be finite, got {control!r}")
@@ -263,10 +328,15 @@ class EKFSLAM:
             if measurement_cov is None
             else _as_covariance(measurement_cov, 2, "measurement_cov")
         )
-        delta, status, _ = compiled.correct(
+        if ids.shape[0] > self._H_slots.shape[0]:
+            self._H_used = np.zeros((2 * ids.shape[0], 2, 5))
+            self._H_slots = np.zeros(2 * ids.shape[0], dtype=np.int64)
+        delta, status, used = compiled.correct(
             self._mean, self._cov, self._P, self._observed, ids, np.ascontiguousarray(readings), Q,
             self.min_range, self.init_mode == "course", self.update_mode == "sequential", self._tracking,
+            self._variant_code, self.iterations, self._prior_pose, self._first, self._H_used, self._H_slots,
         )  # fmt: skip
+        self._n_used = used
         if status == codes.BAD_ID:
             raise ValueError(f"landmark ids must lie in [0, {self.n_landmarks}), got {ids.tolist()}")
         if status == codes.BAD_INPUT:

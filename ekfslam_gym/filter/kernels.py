@@ -11,6 +11,11 @@ conditioned on the map (the Schur complement of the map block):
 - correction:  P^-1 <- P^-1 + sum Hx^T Q^-1 Hx,  d log det = sum log det Q - log det S
 - inverse init: P^-1 <- P^-1 + Gr^T T^-1 Gr,     d log det = log det T - log det(prior block), T = Gz Q Gz^T
 
+The variants change only where the Jacobians are taken, never the algebra above, so the bookkeeping stays exact
+for each: EKF at the current estimate; FEJ (first-estimates Jacobians, Huang, Mourikis & Roumeliotis, IJRR 2010)
+at the pose's prediction and each landmark's first estimate; IEKF (iterated correction) at Gauss-Newton iterates,
+each iteration O(m N), the covariance updated once with the last H.
+
 Status codes returned to the Python wrapper: OK, NOT_PD (innovation covariance not positive definite),
 BAD_ID (a landmark index outside [0, n)), BAD_INPUT (a non-finite control, noise or reading).
 """
@@ -22,8 +27,18 @@ import math
 import numpy as np
 from numba import njit
 
-from .codes import BAD_ID, BAD_INPUT, MODEL_ODOMETRY, NOT_PD, OK
-from .models import inverse_range_bearing, odometry_motion, range_bearing, velocity_motion, wrap_angle
+from .codes import BAD_ID, BAD_INPUT, MODEL_ODOMETRY, MODEL_WHEELS, NOT_PD, OK, VARIANT_FEJ, VARIANT_IEKF
+from .models import (
+    inverse_range_bearing,
+    odometry_motion,
+    range_bearing,
+    velocity_motion,
+    wheel_motion,
+    wrap_angle,
+)
+
+# The iterated correction stops once a Gauss-Newton step moves no state entry by more than this (m or rad).
+ITERATION_TOLERANCE = 1e-9
 
 
 @njit(cache=True)
@@ -109,14 +124,22 @@ def _symmetric_3x3(a: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def predict(mean, cov, P, model, control, dt, noise, noise_in_control_space, track):
+def predict(
+    mean, cov, P, model, control, dt, wheel_base, noise, noise_in_control_space, track, prior_pose, fej, G_used,
+):  # fmt: skip
     """Move the pose by the motion model; update the pose rows/columns of cov and, if tracking, P.
 
     ``noise`` is R (3x3, pose space) or, with ``noise_in_control_space``, M (control space) giving R = V M V^T.
-    Returns (change of log det Sigma (0.0 when not tracking), status).
+    ``prior_pose`` (3,) holds the pose as the last prediction left it (its first estimate, before any
+    correction); with ``fej`` the Jacobian's heading column is taken from it instead of the current estimate,
+    G[:2, 2] = J (p_{k+1|k} - p_{k|k-1}) (Huang, Mourikis & Roumeliotis 2010), which keeps the linearised
+    system's unobservable rotation unobservable. It is then set to the predicted pose. The G used is written
+    to ``G_used`` (3, 3). Returns (change of log det Sigma (0.0 when not tracking), status).
     """
     if model == MODEL_ODOMETRY:
         new_pose, G, V = odometry_motion(mean[:3], control[0], control[1], control[2])
+    elif model == MODEL_WHEELS:
+        new_pose, G, V = wheel_motion(mean[:3], control[0], control[1], control[2], wheel_base)
     else:
         new_pose, G, V = velocity_motion(mean[:3], control[0], control[1], dt)
     for i in range(noise.shape[0]):
@@ -131,9 +154,16 @@ def predict(mean, cov, P, model, control, dt, noise, noise_in_control_space, tra
     else:
         R = noise.copy()
     _symmetric_3x3(R)
+    if fej:
+        G[0, 2] = -(new_pose[1] - prior_pose[1])
+        G[1, 2] = new_pose[0] - prior_pose[0]
+    G_used[:, :] = G
     mean[0] = new_pose[0]
     mean[1] = new_pose[1]
     mean[2] = new_pose[2]
+    prior_pose[0] = new_pose[0]
+    prior_pose[1] = new_pose[1]
+    prior_pose[2] = new_pose[2]
 
     pose_block = sandwich(G, cov[:3, :3].copy()) + R
     _symmetric_3x3(pose_block)
@@ -180,12 +210,20 @@ def _cholesky_in_place(S: np.ndarray) -> bool:
 
 
 @njit(cache=True)
-def _update(mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track):
-    """One EKF correction with the given readings of already-initialised landmarks.
+def _update(
+    mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track, variant, iterations, prior_pose, first,
+    H_used, H_slots, offset,
+):  # fmt: skip
+    """One correction with the given readings of already-initialised landmarks.
 
     Sigma <- Sigma - W W^T with W = (Sigma H^T) L^-T, S = L L^T: algebraically the course's (I - K H) Sigma,
     exactly symmetric (each entry sums the same products in the same order) and O(m N^2). Every loop over N
-    runs along contiguous rows (H Sigma, W^T and Sigma's rows), which the compiler vectorises.
+    runs along contiguous rows (H Sigma, W^T and Sigma's rows), which the compiler vectorises. Where H is
+    taken: EKF, at the current mean; FEJ, at ``prior_pose`` and each landmark's first estimate (``first``), the
+    innovation still at the current mean; IEKF, at Gauss-Newton iterates x_i (up to ``iterations``
+    linearisations, x_{i+1} = mean + K_i (z - h(x_i) - H_i (mean - x_i)), each O(m N)), then the covariance
+    once with the last H. The H used are written to ``H_used[offset:]`` ((2, 5) each: pose then landmark
+    columns) and their slots to ``H_slots[offset:]``.
     Returns (change of log det Sigma, status).
     """
     m = slots.shape[0]
@@ -200,53 +238,95 @@ def _update(mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track)
     # H Sigma (k x n), row by row: Sigma is exactly symmetric, so its pose and landmark rows serve as the
     # columns Sigma H^T needs, read contiguously.
     HS = np.empty((k, n))
-    for a in range(m):
-        lj = 3 + 2 * slots[a]
-        cols[a] = lj
-        zhat, hx, hm = range_bearing(mean[:3], mean[lj : lj + 2], min_range)
-        Hx[a] = hx
-        Hm[a] = hm
-        innovation[2 * a] = readings[a, 0] - zhat[0]
-        innovation[2 * a + 1] = wrap_angle(readings[a, 1] - zhat[1])
-        s0 = cov[0]
-        s1 = cov[1]
-        s2 = cov[2]
-        l0 = cov[lj]
-        l1 = cov[lj + 1]
-        for r in range(2):
-            out = HS[2 * a + r]
-            h0 = hx[r, 0]
-            h1 = hx[r, 1]
-            h2 = hx[r, 2]
-            g0 = hm[r, 0]
-            g1 = hm[r, 1]
-            for col in range(n):
-                out[col] = s0[col] * h0 + s1[col] * h1 + s2[col] * h2 + l0[col] * g0 + l1[col] * g1
-
     S = np.empty((k, k))
-    for a in range(m):
-        lj = cols[a]
-        for r in range(2):
-            for c in range(k):
-                S[2 * a + r, c] = (
-                    Hx[a, r, 0] * HS[c, 0]
-                    + Hx[a, r, 1] * HS[c, 1]
-                    + Hx[a, r, 2] * HS[c, 2]
-                    + Hm[a, r, 0] * HS[c, lj]
-                    + Hm[a, r, 1] * HS[c, lj + 1]
-                )
-    for i in range(k):
-        for j in range(i + 1, k):
-            v = 0.5 * (S[i, j] + S[j, i])
-            S[i, j] = v
-            S[j, i] = v
-    for a in range(m):
-        for r in range(2):
-            for c in range(2):
-                S[2 * a + r, 2 * a + c] += Q[r, c]
-    if not _cholesky_in_place(S):
-        return 0.0, NOT_PD
+    fej = variant == VARIANT_FEJ
+    iterate = variant == VARIANT_IEKF
+    rounds = iterations if iterate else 1
+    x = mean.copy() if iterate else mean  # the linearisation point (the IEKF's iterate)
+    for it in range(rounds):
+        for a in range(m):
+            lj = 3 + 2 * slots[a]
+            cols[a] = lj
+            if fej:
+                zhat, _, _ = range_bearing(mean[:3], mean[lj : lj + 2], min_range)
+                _, hx, hm = range_bearing(prior_pose, first[slots[a]], min_range)
+            else:
+                zhat, hx, hm = range_bearing(x[:3], x[lj : lj + 2], min_range)
+            Hx[a] = hx
+            Hm[a] = hm
+            innovation[2 * a] = readings[a, 0] - zhat[0]
+            innovation[2 * a + 1] = wrap_angle(readings[a, 1] - zhat[1])
+            if it > 0:
+                # z - h(x_i) - H_i (mean - x_i); the iterate's heading is never wrapped, so this is a plain sum
+                e0 = x[0] - mean[0]
+                e1 = x[1] - mean[1]
+                e2 = x[2] - mean[2]
+                f0 = x[lj] - mean[lj]
+                f1 = x[lj + 1] - mean[lj + 1]
+                for r in range(2):
+                    innovation[2 * a + r] += (
+                        hx[r, 0] * e0 + hx[r, 1] * e1 + hx[r, 2] * e2 + hm[r, 0] * f0 + hm[r, 1] * f1
+                    )
+            s0 = cov[0]
+            s1 = cov[1]
+            s2 = cov[2]
+            l0 = cov[lj]
+            l1 = cov[lj + 1]
+            for r in range(2):
+                out = HS[2 * a + r]
+                h0 = hx[r, 0]
+                h1 = hx[r, 1]
+                h2 = hx[r, 2]
+                g0 = hm[r, 0]
+                g1 = hm[r, 1]
+                for col in range(n):
+                    out[col] = s0[col] * h0 + s1[col] * h1 + s2[col] * h2 + l0[col] * g0 + l1[col] * g1
+
+        for a in range(m):
+            lj = cols[a]
+            for r in range(2):
+                for c in range(k):
+                    S[2 * a + r, c] = (
+                        Hx[a, r, 0] * HS[c, 0]
+                        + Hx[a, r, 1] * HS[c, 1]
+                        + Hx[a, r, 2] * HS[c, 2]
+                        + Hm[a, r, 0] * HS[c, lj]
+                        + Hm[a, r, 1] * HS[c, lj + 1]
+                    )
+        for i in range(k):
+            for j in range(i + 1, k):
+                v = 0.5 * (S[i, j] + S[j, i])
+                S[i, j] = v
+                S[j, i] = v
+        for a in range(m):
+            for r in range(2):
+                for c in range(2):
+                    S[2 * a + r, 2 * a + c] += Q[r, c]
+        if not _cholesky_in_place(S):
+            return 0.0, NOT_PD
+        if it == rounds - 1:
+            break
+        # A Gauss-Newton step x <- mean + Sigma H^T S^-1 r, needed only where H is evaluated (the pose and the
+        # read landmarks); column idx of H Sigma is row idx of Sigma H^T.
+        step = _solve_lower_upper(S, innovation)
+        change = 0.0
+        for e in range(3 + k):
+            idx = e if e < 3 else cols[(e - 3) // 2] + (e - 3) % 2
+            v = mean[idx]
+            for i in range(k):
+                v += HS[i, idx] * step[i]
+            change = max(change, abs(v - x[idx]))
+            x[idx] = v
+        if change < ITERATION_TOLERANCE:
+            break
     L = S
+    for a in range(m):
+        H_slots[offset + a] = slots[a]
+        for r in range(2):
+            for c in range(3):
+                H_used[offset + a, r, c] = Hx[a, r, c]
+            H_used[offset + a, r, 3] = Hm[a, r, 0]
+            H_used[offset + a, r, 4] = Hm[a, r, 1]
 
     # W^T = L^-1 H Sigma (k x n), a forward substitution along whole contiguous rows.
     Wt = HS
@@ -312,14 +392,39 @@ def _update(mean, cov, P, slots, readings, Q, Q_inv, logdet_Q, min_range, track)
 
 
 @njit(cache=True)
-def _initialise_inverse(mean, cov, P, slot, reading, Q, track):
+def _solve_lower_upper(L, b):
+    """(L L^T)^-1 b from the lower Cholesky factor L."""
+    k = b.shape[0]
+    y = np.empty(k)
+    for i in range(k):
+        v = b[i]
+        for p in range(i):
+            v -= L[i, p] * y[p]
+        y[i] = v / L[i, i]
+    for i in range(k - 1, -1, -1):
+        v = y[i]
+        for p in range(i + 1, k):
+            v -= L[p, i] * y[p]
+        y[i] = v / L[i, i]
+    return y
+
+
+@njit(cache=True)
+def _initialise_inverse(mean, cov, P, slot, reading, Q, track, fej, prior_pose, first):
     """Inverse-model initialisation: the landmark's mean and covariance blocks from the reading.
 
-    Replaces the landmark's (uncorrelated, prior) block; the reading is not used again. Returns the change of
-    log det Sigma (0.0 when not tracking).
+    Replaces the landmark's (uncorrelated, prior) block; the reading is not used again. The mean is the
+    landmark's first estimate (kept in ``first``); with ``fej`` the heading column of Gr is taken from the
+    pose's first estimate too, J (l - p_{k|k-1}), as FEJ's Jacobians are. Returns the change of log det Sigma
+    (0.0 when not tracking).
     """
     lj = 3 + 2 * slot
     landmark, Gr, Gz = inverse_range_bearing(mean[:3], reading)
+    if fej:
+        Gr[0, 2] = -(landmark[1] - prior_pose[1])
+        Gr[1, 2] = landmark[0] - prior_pose[0]
+    first[slot, 0] = landmark[0]
+    first[slot, 1] = landmark[1]
     old_logdet = logdet2(cov[lj : lj + 2, lj : lj + 2])
     T = sandwich(Gz, Q)
     cross = np.empty((2, cov.shape[1]))
@@ -349,9 +454,15 @@ def _initialise_inverse(mean, cov, P, slot, reading, Q, track):
 
 
 @njit(cache=True)
-def correct(mean, cov, P, observed, ids, readings, Q, min_range, course_init, sequential, track):
+def correct(
+    mean, cov, P, observed, ids, readings, Q, min_range, course_init, sequential, track, variant, iterations,
+    prior_pose, first, H_used, H_slots,
+):  # fmt: skip
     """Correct with m range-bearing readings of known landmarks (ids are 0-based slots).
 
+    ``variant``, ``iterations``, ``prior_pose`` and ``first`` choose where H is taken (see ``_update``);
+    ``first`` (n, 2) receives each landmark's first estimate when it is initialised. ``H_used`` (>= m, 2, 5)
+    and ``H_slots`` (>= m,) receive the Jacobians of the readings used, in the order used.
     Course initialisation: a landmark's first reading sets its mean (its prior covariance stays) and is then
     used in the update. Inverse initialisation: the first reading of a landmark initialises it from the
     inverse sensor model and is not used again (further readings of it in the same step are dropped; readings
@@ -368,6 +479,7 @@ def correct(mean, cov, P, observed, ids, readings, Q, min_range, course_init, se
             return 0.0, BAD_INPUT, 0
     Q_inv = inv2(Q)
     logdet_Q = logdet2(Q)
+    fej = variant == VARIANT_FEJ
     delta = 0.0
     used = 0
 
@@ -381,16 +493,23 @@ def correct(mean, cov, P, observed, ids, readings, Q, min_range, course_init, se
                     landmark, _, _ = inverse_range_bearing(mean[:3], readings[i])
                     mean[3 + 2 * slot] = landmark[0]
                     mean[4 + 2 * slot] = landmark[1]
+                    first[slot, 0] = landmark[0]
+                    first[slot, 1] = landmark[1]
                     observed[slot] = True
                 else:
                     if readings[i, 0] >= min_range:
-                        delta += _initialise_inverse(mean, cov, P, slot, readings[i], Q, track)
+                        delta += _initialise_inverse(
+                            mean, cov, P, slot, readings[i], Q, track, fej, prior_pose, first
+                        )
                         observed[slot] = True
                     continue
             one_slot[0] = slot
             one_reading[0, 0] = readings[i, 0]
             one_reading[0, 1] = readings[i, 1]
-            d, status = _update(mean, cov, P, one_slot, one_reading, Q, Q_inv, logdet_Q, min_range, track)
+            d, status = _update(
+                mean, cov, P, one_slot, one_reading, Q, Q_inv, logdet_Q, min_range, track, variant, iterations,
+                prior_pose, first, H_used, H_slots, used,
+            )  # fmt: skip
             if status != OK:
                 return delta, status, used
             delta += d
@@ -407,14 +526,16 @@ def correct(mean, cov, P, observed, ids, readings, Q, min_range, course_init, se
             landmark, _, _ = inverse_range_bearing(mean[:3], readings[i])
             mean[3 + 2 * slot] = landmark[0]
             mean[4 + 2 * slot] = landmark[1]
+            first[slot, 0] = landmark[0]
+            first[slot, 1] = landmark[1]
             observed[slot] = True
             use[i] = True
         elif readings[i, 0] >= min_range:
-            first = True
+            first_of_slot = True
             for p in range(i):
                 if to_initialise[p] and ids[p] == slot:
-                    first = False
-            to_initialise[i] = first
+                    first_of_slot = False
+            to_initialise[i] = first_of_slot
     n_use = 0
     for i in range(m):
         if use[i]:
@@ -428,12 +549,15 @@ def correct(mean, cov, P, observed, ids, readings, Q, min_range, course_init, se
             chosen[a, 0] = readings[i, 0]
             chosen[a, 1] = readings[i, 1]
             a += 1
-    d, status = _update(mean, cov, P, slots, chosen, Q, Q_inv, logdet_Q, min_range, track)
+    d, status = _update(
+        mean, cov, P, slots, chosen, Q, Q_inv, logdet_Q, min_range, track, variant, iterations, prior_pose, first,
+        H_used, H_slots, 0,
+    )  # fmt: skip
     if status != OK:
         return 0.0, status, 0
     delta += d
     for i in range(m):
         if to_initialise[i]:
-            delta += _initialise_inverse(mean, cov, P, ids[i], readings[i], Q, track)
+            delta += _initialise_inverse(mean, cov, P, ids[i], readings[i], Q, track, fej, prior_pose, first)
             observed[ids[i]] = True
     return delta, OK, n_use

@@ -93,6 +93,57 @@ def odometry_motion(pose: np.ndarray, rot1: float, trans: float, rot2: float):
 
 
 @njit(cache=True)
+def wheel_motion(pose: np.ndarray, left: float, right: float, slip: float, wheel_base: float):
+    """Differential-drive (wheel encoder) motion model with a lateral slip term.
+
+    The wheels travel ``left`` and ``right`` metres on a base of ``wheel_base`` metres: the body turns
+    a = (right - left) / b and travels d = (left + right) / 2 along an arc, whose chord d sinc(a/2) points along
+    the mid-heading theta + a/2 (Thrun, Burgard & Fox, *Probabilistic Robotics*, section 5.3, in chord form).
+    ``slip`` is a sideways displacement (m) along the mid-heading's normal, which wheels cannot measure (the
+    robot sliding along a wall); the odometry reports it as 0 with a variance (README, "Known limitations").
+    Smooth, value and Jacobians, through a = 0; exact for any planar motion (three numbers, three dof).
+
+    Returns the new pose (3,), G = d pose'/d pose (3, 3) and V = d pose'/d (left, right, slip) (3, 3).
+    """
+    theta = pose[2]
+    d = 0.5 * (left + right)
+    a = (right - left) / wheel_base
+    half = 0.5 * a
+    s, ds = _sinc_and_derivative(half)
+    c_mid = math.cos(theta + half)
+    s_mid = math.sin(theta + half)
+    chord = d * s
+    dx = chord * c_mid - slip * s_mid
+    dy = chord * s_mid + slip * c_mid
+
+    new_pose = np.empty(3)
+    new_pose[0] = pose[0] + dx
+    new_pose[1] = pose[1] + dy
+    new_pose[2] = wrap_angle(theta + a)
+
+    G = np.eye(3)
+    G[0, 2] = -dy
+    G[1, 2] = dx
+
+    # d/d d and d/d a of (dx, dy); a enters through sinc(a/2) (d half / d a = 1/2) and the mid-heading.
+    dx_dd = s * c_mid
+    dy_dd = s * s_mid
+    dx_da = 0.5 * (d * ds * c_mid - dy)
+    dy_da = 0.5 * (d * ds * s_mid + dx)
+    inv_b = 1.0 / wheel_base
+    V = np.zeros((3, 3))
+    V[0, 0] = 0.5 * dx_dd - inv_b * dx_da
+    V[1, 0] = 0.5 * dy_dd - inv_b * dy_da
+    V[2, 0] = -inv_b
+    V[0, 1] = 0.5 * dx_dd + inv_b * dx_da
+    V[1, 1] = 0.5 * dy_dd + inv_b * dy_da
+    V[2, 1] = inv_b
+    V[0, 2] = -s_mid
+    V[1, 2] = c_mid
+    return new_pose, G, V
+
+
+@njit(cache=True)
 def range_bearing(pose: np.ndarray, landmark: np.ndarray, min_range: float):
     """Expected range-bearing reading of ``landmark`` from ``pose`` and its Jacobians.
 

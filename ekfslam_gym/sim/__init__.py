@@ -9,6 +9,8 @@ from .odometry import (
     OdometryReading,
     VelocityNoise,
     VelocityReading,
+    WheelOdometryNoise,
+    WheelOdometryReading,
     compose_odometry,
 )
 from .robot import RobotParams
@@ -26,9 +28,12 @@ __all__ = [
     "SensorParams",
     "VelocityNoise",
     "VelocityReading",
+    "WheelOdometryNoise",
+    "WheelOdometryReading",
     "World",
     "compose_odometry",
     "decompose_odometry",
+    "decompose_wheels",
     "make_layout",
     "place_landmarks",
     "velocity_from_motion",
@@ -37,7 +42,7 @@ __all__ = [
 
 def __getattr__(name: str):
     # The compiled odometry helpers: loaded (with numba) on first use, never at import.
-    if name in ("decompose_odometry", "velocity_from_motion"):
+    if name in ("decompose_odometry", "decompose_wheels", "velocity_from_motion"):
         from . import odometry_kernels
 
         return getattr(odometry_kernels, name)

@@ -13,6 +13,7 @@ angle); the heading change is taken as the plain difference so a turn is never a
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -80,6 +81,58 @@ class VelocityNoise:
         _freeze_noise_vector(self, ("alpha1", "alpha2", "alpha3", "alpha4", "v_floor", "omega_floor"))
 
 
+@dataclass(frozen=True)
+class WheelOdometryNoise:
+    """Wheel-encoder odometry: its geometry and noise, in standard deviations (m).
+
+    sigma_left  = wheel_alpha |left| + wheel_floor,  sigma_right = wheel_alpha |right| + wheel_floor
+    sigma_slip  = slip_floor + slip_contact * max(|v_previous|, |v_command|) dt, the second term only in a step
+                  with wall contact (the commanded speeds of this step and the last, as the body answers a
+                  command one substep late)
+
+    wheel_base: m between the wheels (the filter's ``EKFSLAM(wheel_base=...)`` must be the same). The wheels,
+    integrated at the physics substep rate, measure the body's travel along its heading and its turn for any
+    motion: forward, backward, turning in place, a command changing every step (two arcs in one step, whose
+    sideways residual against one arc the reading's slip carries). What they cannot see is the body sliding
+    sideways along a wall (README "Known limitations"); the turn-drive-turn model reads that slide as +-90
+    degree turns and its alpha noise as large heading noise, here it is a sideways slip, position only:
+
+    - ``slide_sensed`` (default): the bumper senses the slide (the wall's direction and the wheels' travel), with
+      an error of std sigma_slip: the reading is the true motion plus noise drawn with exactly the reported
+      covariance, in contact or not, as the odometry model's (consistent by construction);
+    - not sensed: the slip is what the wheels' arcs explain and the slide is left out, only reported as the
+      variance sigma_slip^2. Not consistent: a slide keeps its direction along a wall for many steps, which
+      per-step independent noise does not describe.
+
+    The slip floor only keeps the motion covariance definite. Units: wheel_alpha and slip_contact m/m, floors m.
+    """
+
+    wheel_base: float = 0.3
+    wheel_alpha: float = 0.01
+    wheel_floor: float = 2e-4
+    slip_floor: float = 1e-5
+    slip_contact: float = 0.35
+    slide_sensed: bool = True
+
+    def __post_init__(self) -> None:
+        names = ("wheel_alpha", "wheel_floor", "slip_floor", "slip_contact")
+        for name in ("wheel_base", *names):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"WheelOdometryNoise.{name} must be finite and >= 0, got {value!r}")
+        if self.wheel_base <= 0.0 or self.wheel_floor <= 0.0 or self.slip_floor <= 0.0:
+            raise ValueError(
+                "WheelOdometryNoise wheel_base and floors must be > 0 so the motion covariance is positive definite"
+            )
+        if not isinstance(self.slide_sensed, bool):
+            raise ValueError(f"WheelOdometryNoise.slide_sensed must be a bool, got {self.slide_sensed!r}")
+        vector = np.array(
+            [*(getattr(self, name) for name in names), float(self.slide_sensed)], dtype=np.float64
+        )
+        vector.flags.writeable = False
+        object.__setattr__(self, "vector", vector)
+
+
 class OdometryReading(NamedTuple):
     """One step's odometry in the (rot1, trans, rot2) model.
 
@@ -94,6 +147,15 @@ class OdometryReading(NamedTuple):
 
 class VelocityReading(NamedTuple):
     """One step's odometry in the velocity model: u = (v m/s, omega rad/s), cov (2, 2), u_true (2,)."""
+
+    u: np.ndarray
+    cov: np.ndarray
+    u_true: np.ndarray
+
+
+class WheelOdometryReading(NamedTuple):
+    """One step's wheel odometry: u = (left m, right m, slip m); cov (3, 3) diagonal; u_true (3,) the exact
+    decomposition of the true motion (for tests and diagnostics, not for the filter)."""
 
     u: np.ndarray
     cov: np.ndarray
@@ -138,9 +200,34 @@ def measure_velocity(
     return reading
 
 
+def measure_wheels(
+    trace: Sequence[tuple[float, float, float]],
+    noise: WheelOdometryNoise,
+    contact_travel: float,
+    rng: np.random.Generator,
+) -> WheelOdometryReading:
+    """Wheel odometry of one step from the true poses after each of its substeps (``trace``, the start pose
+    first; the start and end poses suffice when the slide is sensed), with the covariance diag(std^2) (3
+    normals from ``rng``). ``contact_travel``: the commanded travel
+    (m) of a step in contact with a wall, else 0 (see ``WheelOdometryNoise``)."""
+    reading = WheelOdometryReading(np.empty(3), np.zeros((3, 3)), np.empty(3))
+    compiled.wheel_reading(
+        np.array(trace, dtype=np.float64), noise.wheel_base, float(contact_travel), noise.vector,
+        rng.standard_normal(3), *reading,
+    )  # fmt: skip
+    return reading
+
+
 def __getattr__(name: str):
     # The compiled helpers, loaded with numba on first use so that importing this module never loads it.
-    if name in ("decompose_odometry", "odometry_std", "velocity_from_motion", "velocity_std"):
+    if name in (
+        "decompose_odometry",
+        "decompose_wheels",
+        "odometry_std",
+        "velocity_from_motion",
+        "velocity_std",
+        "wheel_std",
+    ):
         from . import odometry_kernels
 
         return getattr(odometry_kernels, name)

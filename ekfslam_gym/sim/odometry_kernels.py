@@ -135,3 +135,94 @@ def velocity_reading(
     for i in range(2):
         u[i] = u_true[i] + std[i] * normals[i]
         cov[i, i] = std[i] * std[i]
+
+
+@njit(cache=True)
+def decompose_wheels(
+    x0: float, y0: float, theta0: float, x1: float, y1: float, theta1: float, wheel_base: float
+) -> tuple[float, float, float]:
+    """The (left, right, slip) wheel travels and sideways slip (m) that take pose 0 exactly to pose 1.
+
+    The inverse of ``ekfslam_gym.filter.models.wheel_motion``: the turn a = theta1 - theta0 (unwrapped), the
+    displacement split along the mid-heading theta0 + a/2 into a forward part f (the arc's chord, so the arc
+    length is d = f / sinc(a/2)) and a sideways part, the slip; left = d - b a / 2, right = d + b a / 2. In free
+    space the slip is the small residual of a step that is not one arc (a command change inside it); sliding
+    along a wall it is most of the motion. Valid for |a| < 2 pi (a step turns at most omega_max dt).
+    """
+    a = theta1 - theta0
+    half = 0.5 * a
+    c_mid = math.cos(theta0 + half)
+    s_mid = math.sin(theta0 + half)
+    dx = x1 - x0
+    dy = y1 - y0
+    forward = dx * c_mid + dy * s_mid
+    slip = -dx * s_mid + dy * c_mid
+    sinc = 1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half
+    d = forward / sinc
+    return d - 0.5 * wheel_base * a, d + 0.5 * wheel_base * a, slip
+
+
+@njit(cache=True)
+def wheel_std(
+    left: float, right: float, contact_travel: float, params: np.ndarray
+) -> tuple[float, float, float]:
+    """Standard deviations (m) of the noise on (left, right, slip); ``params`` is ``WheelOdometryNoise.vector``
+    (wheel_alpha, wheel_floor, slip_floor, slip_contact, slide_sensed).
+
+    Each wheel's error grows with its own travel plus a floor; the slip's with ``contact_travel``, the distance
+    the robot was commanded to drive in a step in contact with a wall (0 without contact), plus a floor."""
+    return (
+        params[0] * abs(left) + params[1],
+        params[0] * abs(right) + params[1],
+        params[2] + params[3] * contact_travel,
+    )
+
+
+@njit(cache=True)
+def wheel_reading(
+    trace: np.ndarray,
+    wheel_base: float,
+    contact_travel: float,
+    params: np.ndarray,
+    normals: np.ndarray,
+    u: np.ndarray,
+    cov: np.ndarray,
+    u_true: np.ndarray,
+) -> None:
+    """Wheel odometry over one step whose poses after each substep are ``trace`` (S+1, 3), the step's start
+    pose first, written into ``u``, ``cov`` (M = diag(std^2); zeros off the diagonal are the caller's) and
+    ``u_true`` (the true motion's decomposition), as ``odometry_reading`` does.
+
+    Slide sensed (``params[4]`` = 1): u = u_true + std * normals (3 normals), exactly the reported covariance.
+    Not sensed: the wheels integrated at the substep rate, each substep's motion projected on its own
+    mid-heading (what the wheels roll; a sideways slide they cannot see) and chained. In free space each
+    substep is an exact arc, so this is the true motion even when the command changed within the step (two
+    arcs, whose residual against one arc is a few millimetres of slip); in contact the slide is missing. The
+    chained motion as (left, right, slip), the wheel travels plus std * normals[:2], is the reading, and M[2, 2]
+    only the modelled variance of the missing slide."""
+    last = trace.shape[0] - 1
+    u_true[0], u_true[1], u_true[2] = decompose_wheels(
+        trace[0, 0], trace[0, 1], trace[0, 2], trace[last, 0], trace[last, 1], trace[last, 2], wheel_base
+    )
+    if params[4] != 0.0:
+        u[0] = u_true[0]
+        u[1] = u_true[1]
+        u[2] = u_true[2]
+    else:
+        x = trace[0, 0]
+        y = trace[0, 1]
+        for i in range(1, last + 1):
+            mid = 0.5 * (trace[i - 1, 2] + trace[i, 2])
+            c = math.cos(mid)
+            s = math.sin(mid)
+            forward = (trace[i, 0] - trace[i - 1, 0]) * c + (trace[i, 1] - trace[i - 1, 1]) * s
+            x += forward * c
+            y += forward * s
+        u[0], u[1], u[2] = decompose_wheels(
+            trace[0, 0], trace[0, 1], trace[0, 2], x, y, trace[last, 2], wheel_base
+        )
+    std = wheel_std(u[0], u[1], contact_travel, params)
+    for i in range(3):
+        if i < 2 or params[4] != 0.0:
+            u[i] += std[i] * normals[i]
+        cov[i, i] = std[i] * std[i]

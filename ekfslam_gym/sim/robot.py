@@ -76,24 +76,50 @@ class DiffDriveRobot:
         space.add(self.control, self.body, self.shape, pivot, gear)
         self._chipmunk = _chipmunk_calls(space, self.control, self.body)
 
-    def advance(self, space: pymunk.Space, v: float, omega: float, substep_dt: float, substeps: int) -> None:
+    def advance(
+        self,
+        space: pymunk.Space,
+        v: float,
+        omega: float,
+        substep_dt: float,
+        substeps: int,
+        trace: list[tuple[float, float, float]] | None = None,
+    ) -> None:
         """Step ``space`` ``substeps`` times of ``substep_dt`` s, commanding forward speed v (m/s) and turn
-        rate omega (rad/s).
+        rate omega (rad/s); append the pose after each substep to ``trace`` if one is given.
 
         pymunk integrates positions *before* it solves velocities, so the velocity solved in one substep moves
         the body in the next: the robot answers a new command one substep late (a small, physical latency).
         The commanded velocity therefore points along the heading at the middle of that next substep, so
-        in free space each substep's motion is exactly the chord of an arc.
+        in free space each substep's motion is exactly the chord of an arc (a step whose command changed is
+        two different arcs, not one: what wheel odometry integrated at the substep rate sees).
         """
         if self._chipmunk is not None and self._chipmunk[0] is space:
-            _, step, handle, get_angle, get_angular_velocity, set_velocity, set_angular_velocity, c, b = (
-                self._chipmunk
-            )
+            (
+                _,
+                step,
+                handle,
+                get_angle,
+                get_angular_velocity,
+                set_velocity,
+                set_angular_velocity,
+                c,
+                b,
+                position,
+            ) = self._chipmunk
             set_angular_velocity(c, omega)
+            if trace is None:
+                for _ in range(substeps):
+                    heading = get_angle(b) + (get_angular_velocity(b) + 0.5 * omega) * substep_dt
+                    set_velocity(c, (v * math.cos(heading), v * math.sin(heading)))
+                    step(handle, substep_dt)
+                return
             for _ in range(substeps):
                 heading = get_angle(b) + (get_angular_velocity(b) + 0.5 * omega) * substep_dt
                 set_velocity(c, (v * math.cos(heading), v * math.sin(heading)))
                 step(handle, substep_dt)
+                p = position(b)
+                trace.append((p.x, p.y, get_angle(b)))
             return
         control = self.control
         body = self.body
@@ -103,6 +129,9 @@ class DiffDriveRobot:
             heading = body.angle + (body.angular_velocity + 0.5 * omega) * substep_dt
             control.velocity = (v * math.cos(heading), v * math.sin(heading))
             space.step(substep_dt)
+            if trace is not None:
+                p = body.position
+                trace.append((p.x, p.y, body.angle))
 
     def pose(self) -> tuple[float, float, float]:
         """True pose (x m, y m, theta rad), theta unwrapped (continuous over the episode)."""
@@ -124,7 +153,7 @@ def _chipmunk_calls(space: pymunk.Space, control: pymunk.Body, body: pymunk.Body
 
         return (
             space, lib.cpSpaceStep, space._space, lib.cpBodyGetAngle, lib.cpBodyGetAngularVelocity,
-            lib.cpBodySetVelocity, lib.cpBodySetAngularVelocity, control._body, body._body,
+            lib.cpBodySetVelocity, lib.cpBodySetAngularVelocity, control._body, body._body, lib.cpBodyGetPosition,
         )  # fmt: skip
     except (ImportError, AttributeError):
         return None

@@ -28,8 +28,11 @@ from .odometry import (
     OdometryReading,
     VelocityNoise,
     VelocityReading,
+    WheelOdometryNoise,
+    WheelOdometryReading,
     measure_odometry,
     measure_velocity,
+    measure_wheels,
 )
 from .robot import ROBOT_COLLISION_TYPE, WALL_CATEGORY, WALL_COLLISION_TYPE, DiffDriveRobot, RobotParams
 from .sensor import RangeBearingSensor, Readings, SensorParams
@@ -46,7 +49,7 @@ class World:
     """A layout's walls and landmarks, the robot at the layout's start pose, its sensor and odometry.
 
     Arguments: layout; robot, sensor, odometry_noise, velocity_noise (defaults if None); dt, the control step
-    (s); substeps, physics steps per control step. ``robot.v_max * dt / substeps`` must not exceed half the
+    (s); substeps, physics steps per control step; wheel_noise (keyword; default if None), the wheel odometry. ``robot.v_max * dt / substeps`` must not exceed half the
     robot's radius, so no substep can carry the robot through a wall.
     """
 
@@ -59,12 +62,15 @@ class World:
         velocity_noise: VelocityNoise | None = None,
         dt: float = 0.1,
         substeps: int = 2,
+        *,
+        wheel_noise: WheelOdometryNoise | None = None,
     ) -> None:
         self.layout = layout
         self.robot_params = robot if robot is not None else RobotParams()
         self.sensor_params = sensor if sensor is not None else SensorParams()
         self.odometry_noise = odometry_noise if odometry_noise is not None else OdometryNoise()
         self.velocity_noise = velocity_noise if velocity_noise is not None else VelocityNoise()
+        self.wheel_noise = wheel_noise if wheel_noise is not None else WheelOdometryNoise()
         if not (math.isfinite(dt) and dt > 0.0):
             raise ValueError(f"dt must be finite and > 0 s, got {dt!r}")
         if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
@@ -108,6 +114,9 @@ class World:
 
         self._pose = self.robot.pose()
         self._prev_pose = self._pose
+        # the poses after each substep of the last step, its start first (see ``wheel_odometry``)
+        self._trace_substeps = not self.wheel_noise.slide_sensed
+        self._trace: list[tuple[float, float, float]] | None = [self._pose] * (substeps + 1)
         self._collided = False
         self._commands: list[tuple[float, float]] = []
 
@@ -133,9 +142,12 @@ class World:
         """One control step with an already clipped command."""
         self._contacts[0] = 0
         robot = self.robot
-        robot.advance(self.space, v, omega, self._h, self.substeps)
+        # the poses after each substep (5 us a step), only for wheel odometry that integrates them
+        trace = [self._pose] if self._trace_substeps else None
+        robot.advance(self.space, v, omega, self._h, self.substeps, trace)
         self._prev_pose = self._pose
         self._pose = robot.pose()
+        self._trace = trace
         self._collided = self._contacts[0] > 0
         return self._collided
 
@@ -179,6 +191,18 @@ class World:
         ``odometry.velocity_from_motion``. Draws 2 normals from ``rng``."""
         return measure_velocity(self._prev_pose, self._pose, self.dt, self.velocity_noise, rng)
 
+    def wheel_odometry(self, rng: np.random.Generator) -> WheelOdometryReading:
+        """The last step as wheel odometry: noisy wheel travels (left, right) and sideways slip, with the
+        covariance diag(std^2) (3, 3); see ``WheelOdometryNoise``. A step in contact with a wall (the bumper:
+        ``collided``) has a slip variance growing with the commanded travel max(|v_previous|, |v|) dt (the body
+        answers a command one substep late). Draws 3 normals from ``rng``; call once per step."""
+        contact_travel = 0.0
+        if self._collided:
+            speeds = [abs(v) for v, _ in self._commands[-2:]]
+            contact_travel = max(speeds) * self.dt
+        trace = self._trace if self._trace_substeps else (self._prev_pose, self._pose)
+        return measure_wheels(trace, self.wheel_noise, contact_travel, rng)
+
     # --- sensing -------------------------------------------------------------------------------------------
     def sense(self, rng: np.random.Generator) -> Readings:
         """Noisy landmark readings from the current true pose (ids (m,) int64, z (m, 2)), ordered by id."""
@@ -200,6 +224,7 @@ class World:
             "sensor": self.sensor_params,
             "odometry_noise": self.odometry_noise,
             "velocity_noise": self.velocity_noise,
+            "wheel_noise": self.wheel_noise,
             "dt": self.dt,
             "substeps": self.substeps,
             "commands": np.array(self._commands, dtype=np.float64).reshape(-1, 2),
@@ -209,7 +234,7 @@ class World:
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__init__(
             state["layout"], state["robot"], state["sensor"], state["odometry_noise"],
-            state["velocity_noise"], state["dt"], state["substeps"],
+            state["velocity_noise"], state["dt"], state["substeps"], wheel_noise=state.get("wheel_noise"),
         )  # fmt: skip
         for v, omega in state["commands"].tolist():
             self._commands.append((v, omega))
