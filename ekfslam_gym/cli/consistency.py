@@ -1,0 +1,120 @@
+"""The filter's consistency under agents' driving, per agent and filter variant (see
+``ekfslam_gym.evaluation.consistency``): pose NEES, map NEES and NIS per step against their chi-squared bands.
+
+python -m ekfslam_gym.consistency [--env-id EKFSLAM-v0] [--agents random,circle] [--filters ekf,fej,iekf]
+    [--seeds 0-49] [--steps 200] [--env-kwargs JSON] [--model PATH] [--json] [--plot FILE.png]
+
+Each value is the sum over runs divided by the summed degrees of freedom (1 when consistent); "inside" is the
+fraction of steps within the 95 % band. The default seeds 0-49 are neither the held-out suite nor the
+evaluation seeds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+from ..evaluation.consistency import QUANTITIES, ConsistencyRun, run_consistency
+from .common import parse_seeds
+
+VARIANTS = ("ekf", "fej", "iekf")
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--env-id", default="EKFSLAM-v0")
+    parser.add_argument("--agents", default="random,circle", help="comma-separated agent names")
+    parser.add_argument(
+        "--filters", default="ekf", help=f"comma-separated filter variants ({', '.join(VARIANTS)})"
+    )
+    parser.add_argument("--seeds", default="0-49", type=parse_seeds)
+    parser.add_argument("--steps", type=int, default=200)
+    parser.add_argument("--env-kwargs", type=json.loads, default=None, help="config overrides as JSON")
+    parser.add_argument("--model", default=None, help="the saved policy, for the ppo agent")
+    parser.add_argument("--json", action="store_true", help="one JSON object on the last line of stdout")
+    parser.add_argument("--plot", default=None, metavar="FILE.png", help="the three quantities over time")
+    return parser
+
+
+def plot_runs(runs: list[ConsistencyRun], path: str) -> None:
+    """One panel per quantity: each run's normalised value over time and its 95 % band."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(len(QUANTITIES), 1, figsize=(8, 8), sharex=True)
+    titles = {"pose_nees": "pose NEES / 3", "map_nees": "map NEES / dof", "nis": "NIS / dof"}
+    for ax, quantity in zip(axes, QUANTITIES):
+        for run in runs:
+            (line,) = ax.plot(run.normalised(quantity), lw=1.0, label=run.label)
+            lo, hi = run.bands(quantity)
+            ax.fill_between(range(lo.size), lo, hi, color=line.get_color(), alpha=0.12, lw=0)
+        ax.axhline(1.0, color="k", lw=0.6)
+        ax.set_ylabel(titles[quantity])
+        ax.set_yscale("log")
+    axes[0].legend(fontsize=8)
+    axes[-1].set_xlabel("step")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    import gymnasium as gym
+
+    import ekfslam_gym  # noqa: F401  (registers the ids)
+    from agents import AGENTS, make_agent
+
+    parser = _build_parser()
+    args = parser.parse_args(argv)
+    agents = [a.strip() for a in args.agents.split(",") if a.strip()]
+    filters = [f.strip() for f in args.filters.split(",") if f.strip()]
+    if unknown := [a for a in agents if a not in AGENTS]:
+        parser.error(f"unknown agent(s) {unknown}; choose from {sorted(AGENTS)}")
+    if unknown := [f for f in filters if f not in VARIANTS]:
+        parser.error(f"unknown filter variant(s) {unknown}; choose from {list(VARIANTS)}")
+    if args.steps < 1:
+        parser.error("--steps must be positive")
+    if "ppo" in agents and not args.model:
+        parser.error("the ppo agent needs --model PATH")
+
+    runs = []
+    for name in agents:
+        agent = make_agent(name, model_path=args.model) if name == "ppo" else make_agent(name)
+        for variant in filters:
+            overrides = dict(args.env_kwargs or {})
+            overrides["filter"] = {**overrides.get("filter", {}), "variant": variant}
+
+            def factory(overrides=overrides):
+                return gym.make(args.env_id, max_episode_steps=args.steps, **overrides)
+
+            runs.append(run_consistency(factory, agent, args.seeds, args.steps, f"{name} / {variant}"))
+            print(f"done: {name} / {variant}", file=sys.stderr)
+
+    summaries = [run.summary() for run in runs]
+    if args.plot:
+        plot_runs(runs, args.plot)
+    if args.json:
+        print(
+            json.dumps(
+                {"env_id": args.env_id, "seeds": len(args.seeds), "steps": args.steps, "runs": summaries}
+            )
+        )
+        return 0
+    header = f"{'agent / filter':<22}" + "".join(f"{q + ' median':>18}{'inside':>8}" for q in QUANTITIES)
+    print(
+        f"{args.env_id}: {len(args.seeds)} runs x {args.steps} steps; values are sums over runs / summed dof"
+    )
+    print(header)
+    for s in summaries:
+        cells = "".join(
+            f"{s[q]['median'] if s[q]['median'] is not None else float('nan'):>18.2f}{s[q]['inside']:>8.0%}"
+            for q in QUANTITIES
+        )
+        print(f"{s['label']:<22}{cells}")
+    return 0
