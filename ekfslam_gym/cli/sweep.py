@@ -1,0 +1,159 @@
+"""Train and evaluate PPO over env ids x training seeds on Ray, and tabulate the evaluations.
+
+Usage::
+
+    python -m ekfslam_gym.sweep --env-ids EKFSLAM-v0 --seeds 0-4 --timesteps 200000 --out runs/sweep
+    python -m ekfslam_gym.sweep --env-ids EKFSLAM-v0,EKFSLAM-Loop-v0 --seeds 0-2 --address auto --json
+
+Each (env id, seed) trains as ``python train.py --config CONFIG --env-id ID --seed S`` would (into
+``OUT/<env-id>_seed<S>/``) and its final model is evaluated on ``--eval-seeds`` (default 20000-20009; the
+held-out suite 10000-10049 is refused). Finished trials are skipped, interrupted ones resume (see
+``agents.sweep``). ``OUT/sweep.json`` and ``OUT/sweep.md`` hold, per env id, the IQM with its 95 % bootstrap
+CI of every metric pooled over the seeds' episodes and per seed (``ekfslam_gym.evaluation.aggregate``).
+Progress goes to stderr; with ``--json`` the last line of stdout is the JSON object of ``sweep.json``:
+``{"env_ids", "seeds", "eval_seeds", "timesteps" (per env id), "wall_seconds", "trained_steps", "steps_per_second",
+"failed", "results": {env_id: {"pooled": summary, "seeds": {seed: summary}}}}`` with each summary as the
+evaluate command's (``ekfslam_gym.evaluation.report``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from ..evaluation.aggregate import summary
+from ..evaluation.episodes import METRIC_KEYS
+from ..evaluation.report import json_safe, markdown_table
+from .common import parse_seeds
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="python -m ekfslam_gym.sweep",
+        description="Train PPO over env ids x seeds on Ray (local or a cluster) and tabulate the evaluations.",
+    )
+    parser.add_argument("--env-ids", default="EKFSLAM-v0", help="env ids, comma-separated")
+    parser.add_argument("--seeds", type=parse_seeds, required=True, help="training seeds, A-B or A,B,C")
+    parser.add_argument("--config", type=Path, default=Path("configs/ppo.yaml"),
+                        help="training config in rl-zoo3's format, as train.py's")  # fmt: skip
+    parser.add_argument("--timesteps", type=int, help="env steps per trial (overrides n_timesteps)")
+    parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",
+                        help="override entries of the config, values parsed as YAML (as train.py's)")  # fmt: skip
+    parser.add_argument("--eval-seeds", type=parse_seeds, default=None,
+                        help="evaluation seeds, default 20000-20009; never the held-out 10000-10049")  # fmt: skip
+    parser.add_argument(
+        "--out", type=Path, default=Path("runs/sweep"), help="sweep folder (default runs/sweep)"
+    )
+    parser.add_argument("--address", default=None,
+                        help="join a running Ray cluster ('auto' or 'ray://HOST:PORT'); default: a local Ray")  # fmt: skip
+    parser.add_argument("--workers", type=int, default=None,
+                        help="CPUs of the local Ray, one trial each (default: the machine's cores)")  # fmt: skip
+    parser.add_argument(
+        "--json", action="store_true", help="print the sweep's JSON object as stdout's last line"
+    )
+    return parser
+
+
+def tabulate(results: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per env id: the summary of all seeds' episodes pooled, and one summary per seed (in seed order)."""
+    tables: dict[str, dict[str, Any]] = {}
+    for env_id in dict.fromkeys(r["env_id"] for r in results):
+        runs = sorted((r for r in results if r["env_id"] == env_id), key=lambda r: r["seed"])
+        pooled = [e for r in runs for e in _episodes(r)]
+        tables[env_id] = {
+            "pooled": summary("pooled", pooled),
+            "seeds": {str(r["seed"]): summary(f"seed {r['seed']}", _episodes(r)) for r in runs},
+        }
+    return tables
+
+
+def _episodes(result: Mapping[str, Any]) -> list[dict[str, float]]:
+    """A trial's episodes with JSON's nulls back as NaN (the aggregates leave NaN out)."""
+    return [{k: float("nan") if v is None else v for k, v in e.items()} for e in result["episodes"]]
+
+
+def markdown(report: Mapping[str, Any]) -> str:
+    """``sweep.md``: one table per env id, the pooled row first, then one row per training seed."""
+    parts = []
+    seeds = report["eval_seeds"]
+    for env_id, table in report["results"].items():
+        rows = {"pooled": table["pooled"], **{f"seed {s}": t for s, t in table["seeds"].items()}}
+        text = markdown_table(rows, METRIC_KEYS).replace("| agent |", "| training seed |", 1)
+        parts.append(
+            f"## `{env_id}`\n\n{len(table['seeds'])} training seeds x {len(seeds)} evaluation seeds "
+            f"({seeds[0]}-{seeds[-1]}), final models after {report['timesteps'][env_id]} env steps; the pooled row "
+            f"pools every seed's episodes.\n\n{text}"
+        )
+    return "\n".join(parts)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = _build_parser()
+    args = parser.parse_args(argv)
+    from agents import sweep, training
+
+    env_ids = [e.strip() for e in args.env_ids.split(",") if e.strip()]
+    if not env_ids:
+        parser.error("--env-ids names no env id")
+    eval_seeds = tuple(args.eval_seeds or sweep.EVAL_SEEDS)
+    if sweep.held_out_overlap(eval_seeds):
+        parser.error(
+            f"--eval-seeds {eval_seeds[0]}-{eval_seeds[-1]} overlap the held-out suite 10000-10049, which is for "
+            "the final table only (README, Evaluation); evaluate sweeps on 20000-20009 (the default)"
+        )
+    if args.address is not None and args.workers is not None:
+        parser.error("--workers sizes the local Ray; with --address the cluster's size decides")
+    if args.workers is not None and args.workers < 1:
+        parser.error("--workers must be at least 1")
+    if not args.config.is_file():
+        parser.error(f"config file {args.config} does not exist")
+    hyperparams = training.parse_hyperparams(args.hyperparams)
+
+    trials = []
+    for env_id in env_ids:
+        entry = training.resolve_entry(args.config, env_id, hyperparams, timesteps=args.timesteps)
+        if int(entry["n_timesteps"]) <= 0:
+            parser.error("--timesteps must be positive")
+        for seed in args.seeds:
+            if sweep.held_out_overlap(range(seed, seed + int(entry["n_envs"]))):
+                parser.error(f"training seed {seed} seeds envs in the held-out suite 10000-10049")
+            command = ["--config", str(args.config), "--env-id", env_id, "--seed", str(seed),
+                       "--out", str(args.out / f"{env_id}_seed{seed}"), "--timesteps", str(entry["n_timesteps"]),
+                       *(["--hyperparams", *args.hyperparams] if args.hyperparams else [])]  # fmt: skip
+            trials.append(sweep.Trial(env_id, seed, entry, args.out, eval_seeds, tuple(command)))
+
+    started = time.perf_counter()
+    results, failures = sweep.run_trials(trials, address=args.address, workers=args.workers)
+    wall = time.perf_counter() - started
+    trained = sum(r["trained_steps"] for r in results)
+    report = {
+        "env_ids": env_ids,
+        "seeds": list(args.seeds),
+        "eval_seeds": list(eval_seeds),
+        "timesteps": {t.env_id: int(t.entry["n_timesteps"]) for t in trials},
+        "wall_seconds": wall,
+        "trained_steps": trained,
+        "steps_per_second": trained / wall if trained else None,
+        "failed": [{"trial": t.name, "error": e} for t, e in failures],
+        "results": tabulate(results),
+    }
+    report = json_safe(report)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "sweep.json").write_text(json.dumps(report, indent=1, allow_nan=False))
+    (args.out / "sweep.md").write_text(markdown(report))
+    print(f"{len(results)} trials ({trained} env steps trained in {wall:.1f} s); tables in "
+          f"{args.out / 'sweep.md'}", file=sys.stderr)  # fmt: skip
+    if args.json:
+        print(json.dumps(report, allow_nan=False), flush=True)
+    else:
+        print(markdown(report), end="")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
