@@ -323,3 +323,24 @@ def test_evaluate_cli_runs_the_ppo_agent(tiny_ppo, capsys):
     assert main([*argv, *other, "--json", "--no-progress"]) == 0
     captured = capsys.readouterr()
     assert "trained with env_kwargs" in captured.err and json.loads(captured.out)["agent"] == "ppo"
+
+
+def test_per_model_rows_are_named_by_run_when_files_share_a_name(tiny_ppo, tmp_path, capsys):
+    """Every run's best_model.zip: --per-model must give one row per run, not overwrite one label."""
+    import json
+    import shutil
+
+    from ekfslam_gym.cli.evaluate import main
+
+    models = []
+    for run in ("run_a", "run_b"):
+        folder = tmp_path / run
+        folder.mkdir()
+        for source in tiny_ppo.parent.iterdir():
+            name = source.name.replace(tiny_ppo.stem, "best_model")
+            shutil.copy(source, folder / name)
+        models += ["--model", str(folder / "best_model.zip")]
+    argv = ["--agent", "ppo", *models, "--per-model", "--seeds", "0", "--max-episode-steps", "5", "--json"]
+    assert main([*argv, "--no-progress"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert list(rows) == ["ppo[run_a/best_model]", "ppo[run_b/best_model]"]

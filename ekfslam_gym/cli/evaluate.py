@@ -103,7 +103,10 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
                 parser.error("the ppo agent needs --model PATH")
             models = [make_agent("ppo", model_path=path, **kwargs) for path in args.model]
             if args.per_model and len(models) > 1:
-                entries += [(f"ppo[{Path(p).with_suffix('').name}]", [m]) for p, m in zip(args.model, models)]
+                names = [Path(p).with_suffix("").name for p in args.model]
+                if len(set(names)) < len(names):  # e.g. every run's best_model.zip: name them by their run
+                    names = [f"{Path(p).parent.name}/{n}" for p, n in zip(args.model, names)]
+                entries += [(f"ppo[{n}]", [m]) for n, m in zip(names, models)]
             else:
                 entries.append(("ppo", models))
         else:
