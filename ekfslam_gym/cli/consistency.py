@@ -47,19 +47,19 @@ def plot_runs(runs: list[ConsistencyRun], path: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(len(QUANTITIES), 1, figsize=(8, 8), sharex=True)
+    fig, axes = plt.subplots(len(QUANTITIES), 1, figsize=(11, 8), sharex=True, layout="constrained")
     titles = {"pose_nees": "pose NEES / 3", "map_nees": "map NEES / dof", "nis": "NIS / dof"}
     for ax, quantity in zip(axes, QUANTITIES):
         for run in runs:
             (line,) = ax.plot(run.normalised(quantity), lw=1.0, label=run.label)
             lo, hi = run.bands(quantity)
-            ax.fill_between(range(lo.size), lo, hi, color=line.get_color(), alpha=0.12, lw=0)
+            ax.fill_between(range(lo.size), lo, hi, color=line.get_color(), alpha=0.08, lw=0)
         ax.axhline(1.0, color="k", lw=0.6)
         ax.set_ylabel(titles[quantity])
         ax.set_yscale("log")
-    axes[0].legend(fontsize=8)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside right upper", fontsize=8)
     axes[-1].set_xlabel("step")
-    fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
