@@ -71,14 +71,6 @@ def trial_state(folder: Path) -> str:
     return "new"
 
 
-def _split_time_limit(env_kwargs: dict[str, Any]) -> tuple[dict[str, Any], int | None]:
-    """Training passes ``env_kwargs`` to ``gym.make``, where ``max_episode_steps`` is ``gym.make``'s own
-    argument; ``make_env`` takes it apart, with the same effect (the env's horizon and the TimeLimit agree)."""
-    kwargs = dict(env_kwargs)
-    steps = kwargs.pop("max_episode_steps", None)
-    return kwargs, None if steps is None else int(steps)
-
-
 def run_trial(trial: Trial) -> dict[str, Any]:
     """Train (or resume, or skip) the trial, evaluate its final model and write ``result.json``; returns it.
 
@@ -114,10 +106,10 @@ def run_trial(trial: Trial) -> dict[str, Any]:
     from .ppo import PPOAgent
 
     env_id, _, entry = training.read_run(folder)
-    env_kwargs, max_episode_steps = _split_time_limit(entry["env_kwargs"])
     started = time.perf_counter()
-    episodes = evaluate_agent(PPOAgent(folder / "model.zip"), env_id, trial.eval_seeds, env_kwargs,
-                              max_episode_steps=max_episode_steps, label=trial.name)  # fmt: skip
+    # make_env hands a max_episode_steps among the training env_kwargs to gym.make as its own argument
+    episodes = evaluate_agent(PPOAgent(folder / "model.zip"), env_id, trial.eval_seeds, entry["env_kwargs"],
+                              label=trial.name)  # fmt: skip
     from ekfslam_gym.evaluation.report import json_safe
 
     result = {

@@ -19,6 +19,8 @@ from .config import EnvConfig
 from .observation import ObservationLayout, make_memory, observation_constants
 from .rewards import REWARD_TERMS
 
+ODOMETERS = {"odometry": "odometry", "wheels": "wheel_odometry", "velocity": "velocity_odometry"}
+
 
 class EKFSLAMEnv(gym.Env):
     """Active SLAM: drive a differential-drive robot so that its own EKF-SLAM map becomes certain.
@@ -187,6 +189,8 @@ class EKFSLAMEnv(gym.Env):
             initial_pose=layout.start, min_range=max(cfg.sensor.min_range, 1e-3), resync_every=f.resync_every,
             variant=f.variant, iterations=f.iterations, wheel_base=self._world.wheel_noise.wheel_base,
         )  # fmt: skip
+        # The world's odometer for the filter's motion model, chosen once per episode rather than every step.
+        self._read_odometry = getattr(self._world, ODOMETERS[f.motion_model])
         self._bounds = np.asarray(layout.bounds, dtype=np.float64)
         self._true_landmarks = np.ascontiguousarray(layout.landmarks, dtype=np.float64)
         self._memory = make_memory(self._bounds, cfg.observation.memory_resolution)
@@ -283,13 +287,7 @@ class EKFSLAMEnv(gym.Env):
         x1, y1, _ = world.pose_tuple
         self._path_length += math.hypot(x1 - x0, y1 - y0)
         self._collisions += collided
-        model = ekf.motion_model
-        if model == "odometry":
-            odometry = world.odometry(rng)
-        elif model == "wheels":
-            odometry = world.wheel_odometry(rng)
-        else:
-            odometry = world.velocity_odometry(rng)
+        odometry = self._read_odometry(rng)
         readings = world.sense(rng)
         self._odometry, self._odometry_cov, self._last_readings = odometry.u, odometry.cov, readings
         self._t += 1
@@ -405,12 +403,14 @@ class EKFSLAMEnv(gym.Env):
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_belief"] = None  # views: a pickle would copy them apart from the filter; rebuilt on load
+        state.pop("_read_odometry", None)  # a bound method of the world: rebound on load
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         if self._ekf is not None:
             self._belief = self._belief_views()
+            self._read_odometry = getattr(self._world, ODOMETERS[self.config.filter.motion_model])
 
     @staticmethod
     def _largest_eigenvalue(cov: np.ndarray) -> float:

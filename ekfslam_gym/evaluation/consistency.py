@@ -90,7 +90,7 @@ def innovation_nis(
 ) -> tuple[float, int]:
     """(NIS, dof) of the readings of landmarks already in ``predicted`` (an ``EKFSLAM`` after its prediction),
     all readings of the step jointly; (0, 0) when none qualifies."""
-    from ..angles import wrap_angles
+    from ..angles import wrap_angle
     from ..filter.models import range_bearing
 
     keep = [i for i, j in enumerate(ids) if predicted.observed[j]]
@@ -106,7 +106,7 @@ def innovation_nis(
         H[2 * row : 2 * row + 2, :3] = hx
         H[2 * row : 2 * row + 2, lj : lj + 2] = hm
         nu[2 * row] = z[i, 0] - zhat[0]
-        nu[2 * row + 1] = wrap_angles(np.array([z[i, 1] - zhat[1]]))[0]
+        nu[2 * row + 1] = wrap_angle(z[i, 1] - zhat[1])
     S = H @ cov @ H.T + np.kron(np.eye(len(keep)), measurement_cov)
     return float(nu @ np.linalg.solve(S, nu)), int(nu.size)
 

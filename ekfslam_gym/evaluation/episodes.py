@@ -92,15 +92,16 @@ def make_env(
     max_episode_steps: int | None = None,
     render_mode: str | None = None,
 ) -> gym.Env:
-    """``gym.make`` with config overrides; ``max_episode_steps`` goes into the env's config when the registered
-    config is a mapping (so the observation's time-left term agrees), else into a TimeLimit."""
+    """``gym.make`` with config overrides; ``max_episode_steps`` (the argument, else one among ``env_kwargs``, as
+    a training record holds it) goes into the env's config when the registered config is a mapping (so the
+    observation's time-left term agrees), else into a TimeLimit."""
     import ekfslam_gym  # noqa: F401  (registers the env ids)
 
     kwargs = dict(env_kwargs or {})
     limit = None
-    if max_episode_steps is None and "max_episode_steps" in kwargs:  # gym.make's own argument, from a record
-        max_episode_steps = kwargs.pop("max_episode_steps")
-    kwargs.pop("max_episode_steps", None)
+    recorded = kwargs.pop("max_episode_steps", None)
+    if max_episode_steps is None:
+        max_episode_steps = recorded
     if max_episode_steps is not None:
         base = kwargs.get("config", gym.spec(env_id).kwargs.get("config"))
         if base is None or isinstance(base, Mapping):

@@ -340,12 +340,7 @@ def _update(
         lii = L[i, i]
         for col in range(n):
             wi[col] /= lii
-    y = np.empty(k)
-    for i in range(k):
-        v = innovation[i]
-        for p in range(i):
-            v -= L[i, p] * y[p]
-        y[i] = v / L[i, i]
+    y = _forward_solve(L, innovation)
 
     for row in range(n):
         v = 0.0
@@ -392,8 +387,8 @@ def _update(
 
 
 @njit(cache=True)
-def _solve_lower_upper(L, b):
-    """(L L^T)^-1 b from the lower Cholesky factor L."""
+def _forward_solve(L, b):
+    """L^-1 b for a lower-triangular L."""
     k = b.shape[0]
     y = np.empty(k)
     for i in range(k):
@@ -401,6 +396,14 @@ def _solve_lower_upper(L, b):
         for p in range(i):
             v -= L[i, p] * y[p]
         y[i] = v / L[i, i]
+    return y
+
+
+@njit(cache=True)
+def _solve_lower_upper(L, b):
+    """(L L^T)^-1 b from the lower Cholesky factor L."""
+    k = b.shape[0]
+    y = _forward_solve(L, b)
     for i in range(k - 1, -1, -1):
         v = y[i]
         for p in range(i + 1, k):

@@ -108,18 +108,13 @@ class DiffDriveRobot:
                 position,
             ) = self._chipmunk
             set_angular_velocity(c, omega)
-            if trace is None:
-                for _ in range(substeps):
-                    heading = get_angle(b) + (get_angular_velocity(b) + 0.5 * omega) * substep_dt
-                    set_velocity(c, (v * math.cos(heading), v * math.sin(heading)))
-                    step(handle, substep_dt)
-                return
             for _ in range(substeps):
                 heading = get_angle(b) + (get_angular_velocity(b) + 0.5 * omega) * substep_dt
                 set_velocity(c, (v * math.cos(heading), v * math.sin(heading)))
                 step(handle, substep_dt)
-                p = position(b)
-                trace.append((p.x, p.y, get_angle(b)))
+                if trace is not None:
+                    p = position(b)
+                    trace.append((p.x, p.y, get_angle(b)))
             return
         control = self.control
         body = self.body
