@@ -267,3 +267,40 @@ def test_loss_of_definiteness_is_reported_as_divergence():
     ekf._cov[:] = -np.eye(ekf.state_size)
     with pytest.raises(FilterDivergedError):
         ekf.correct([0], [[2.0, 0.1]])
+
+
+@pytest.mark.parametrize("variant", ["ekf", "fej", "iekf"])
+def test_update_is_predict_then_correct_bitwise(variant):
+    rng = np.random.default_rng(5)
+    landmarks = ring_landmarks(10)
+    drive = loop_drive(rng, 80, landmarks, CONTROL_COV, MEASUREMENT_COV)
+    one = make_filter(10, variant=variant, initial_pose=drive.true_poses[0])
+    two = make_filter(10, variant=variant, initial_pose=drive.true_poses[0])
+    for control, (ids, z) in zip(drive.controls, drive.readings):
+        ids = np.ascontiguousarray(ids, dtype=np.int64)
+        z = np.ascontiguousarray(z, dtype=np.float64).reshape(-1, 2)
+        control = np.asarray(control, dtype=np.float64)
+        expected = one.predict(control, control_cov=CONTROL_COV) + one.correct(ids, z)
+        assert two.update(control, CONTROL_COV, ids, z) == expected
+        np.testing.assert_array_equal(two.mean, one.mean)
+        np.testing.assert_array_equal(two.cov, one.cov)
+        assert two.log_det == one.log_det
+    check_bookkeeping(two)
+
+
+def test_update_refuses_arrays_it_would_have_to_convert():
+    ekf = make_filter(3)
+    control = np.zeros(3)
+    ids = np.array([0], dtype=np.int64)
+    z = np.array([[1.0, 0.0]])
+    for bad in (
+        (control.astype(np.float32), CONTROL_COV, ids, z),
+        (control, CONTROL_COV[:2, :2], ids, z),
+        (control, CONTROL_COV, ids.astype(np.int32), z),
+        (control, CONTROL_COV, ids, z[:, :1]),
+        (control, np.asfortranarray(CONTROL_COV + np.eye(3) * 0.0)[:, ::-1], ids, z),
+    ):
+        with pytest.raises(TypeError):
+            ekf.update(*bad)
+    with pytest.raises(ValueError, match="landmark ids"):
+        ekf.update(control, CONTROL_COV, np.array([7], dtype=np.int64), z)  # no such landmark

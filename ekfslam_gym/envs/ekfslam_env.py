@@ -295,8 +295,7 @@ class EKFSLAMEnv(gym.Env):
         self._collided = collided
 
         try:
-            ekf.predict(odometry.u, control_cov=odometry.cov)
-            ekf.correct(readings.ids, readings.z)
+            ekf.update(odometry.u, odometry.cov, readings.ids, readings.z)
             failed = not math.isfinite(ekf.log_det)
         except FilterDivergedError:
             failed = True

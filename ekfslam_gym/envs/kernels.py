@@ -90,6 +90,9 @@ def _window(out, o, memory, bounds, resolution, x, y, c, s, grid, extent, sample
     rows, cols = memory.shape
     cell = 2.0 * extent / grid
     step = cell / samples
+    # A multiplication instead of two divisions per sample (481 samples a step by default): exactly the same
+    # cells when the resolution is a power of two (the default 0.5 m), else the same up to rounding.
+    per_metre = 1.0 / resolution
     for row in range(grid):
         for col in range(grid):
             total = 0.0
@@ -99,8 +102,8 @@ def _window(out, o, memory, bounds, resolution, x, y, c, s, grid, extent, sample
                     forward = -extent + col * cell + (j + 0.5) * step
                     wx = x + c * forward - s * left
                     wy = y + s * forward + c * left
-                    mc = int(math.floor((wx - bounds[0]) / resolution))
-                    mr = int(math.floor((wy - bounds[1]) / resolution))
+                    mc = int(math.floor((wx - bounds[0]) * per_metre))
+                    mr = int(math.floor((wy - bounds[1]) * per_metre))
                     if 0 <= mr < rows and 0 <= mc < cols:
                         total += memory[mr, mc]
                     else:

@@ -31,7 +31,7 @@ from .codes import BAD_ID, BAD_INPUT, MODEL_ODOMETRY, MODEL_WHEELS, NOT_PD, OK, 
 from .models import (
     inverse_range_bearing,
     odometry_motion,
-    range_bearing,
+    range_bearing_into,
     velocity_motion,
     wheel_motion,
     wrap_angle,
@@ -240,6 +240,8 @@ def _update(
     HS = np.empty((k, n))
     S = np.empty((k, k))
     fej = variant == VARIANT_FEJ
+    scratch_x = np.empty((2, 3))  # the FEJ's Jacobians at the current mean, not used
+    scratch_m = np.empty((2, 2))
     iterate = variant == VARIANT_IEKF
     rounds = iterations if iterate else 1
     x = mean.copy() if iterate else mean  # the linearisation point (the IEKF's iterate)
@@ -247,15 +249,19 @@ def _update(
         for a in range(m):
             lj = 3 + 2 * slots[a]
             cols[a] = lj
+            hx = Hx[a]
+            hm = Hm[a]
             if fej:
-                zhat, _, _ = range_bearing(mean[:3], mean[lj : lj + 2], min_range)
-                _, hx, hm = range_bearing(prior_pose, first[slots[a]], min_range)
+                range_bearing_into(prior_pose, first[slots[a]], min_range, hx, hm)
+                expected_range, expected_bearing = range_bearing_into(
+                    mean[:3], mean[lj : lj + 2], min_range, scratch_x, scratch_m
+                )
             else:
-                zhat, hx, hm = range_bearing(x[:3], x[lj : lj + 2], min_range)
-            Hx[a] = hx
-            Hm[a] = hm
-            innovation[2 * a] = readings[a, 0] - zhat[0]
-            innovation[2 * a + 1] = wrap_angle(readings[a, 1] - zhat[1])
+                expected_range, expected_bearing = range_bearing_into(
+                    x[:3], x[lj : lj + 2], min_range, hx, hm
+                )
+            innovation[2 * a] = readings[a, 0] - expected_range
+            innovation[2 * a + 1] = wrap_angle(readings[a, 1] - expected_bearing)
             if it > 0:
                 # z - h(x_i) - H_i (mean - x_i); the iterate's heading is never wrapped, so this is a plain sum
                 e0 = x[0] - mean[0]

@@ -151,29 +151,38 @@ def range_bearing(pose: np.ndarray, landmark: np.ndarray, min_range: float):
     divide by the range; below ``min_range`` metres they use ``min_range`` instead, so a landmark on top of
     the robot gives a large but finite Jacobian rather than a division by zero.
     """
+    Hx = np.empty((2, 3))
+    Hm = np.empty((2, 2))
+    z = np.empty(2)
+    z[0], z[1] = range_bearing_into(pose, landmark, min_range, Hx, Hm)
+    return z, Hx, Hm
+
+
+@njit(cache=True)
+def range_bearing_into(
+    pose: np.ndarray, landmark: np.ndarray, min_range: float, Hx: np.ndarray, Hm: np.ndarray
+):
+    """``range_bearing`` writing the Jacobians into ``Hx`` (2, 3) and ``Hm`` (2, 2) and returning (range,
+    bearing): the filter's correction calls it for every reading, and three small arrays a reading cost more
+    than the arithmetic."""
     dx = landmark[0] - pose[0]
     dy = landmark[1] - pose[1]
     q = dx * dx + dy * dy
     r = math.sqrt(q)
-    z = np.empty(2)
-    z[0] = r
-    z[1] = wrap_angle(math.atan2(dy, dx) - pose[2])
-
+    bearing = wrap_angle(math.atan2(dy, dx) - pose[2])
     rj = max(r, min_range)
     qj = rj * rj
-    Hm = np.empty((2, 2))
     Hm[0, 0] = dx / rj
     Hm[0, 1] = dy / rj
     Hm[1, 0] = -dy / qj
     Hm[1, 1] = dx / qj
-    Hx = np.empty((2, 3))
     Hx[0, 0] = -Hm[0, 0]
     Hx[0, 1] = -Hm[0, 1]
     Hx[0, 2] = 0.0
     Hx[1, 0] = -Hm[1, 0]
     Hx[1, 1] = -Hm[1, 1]
     Hx[1, 2] = -1.0
-    return z, Hx, Hm
+    return r, bearing
 
 
 @njit(cache=True)

@@ -130,6 +130,11 @@ class DiffDriveRobot:
 
     def pose(self) -> tuple[float, float, float]:
         """True pose (x m, y m, theta rad), theta unwrapped (continuous over the episode)."""
+        calls = self._chipmunk
+        if calls is not None:  # the same C getters pymunk's properties call, without building a Vec2d
+            b = calls[8]
+            p = calls[9](b)
+            return (p.x, p.y, calls[3](b))
         p = self.body.position
         return (p.x, p.y, self.body.angle)
 
