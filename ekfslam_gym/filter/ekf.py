@@ -374,9 +374,8 @@ class EKFSLAM:
         """``predict(control, control_cov=control_cov)`` then ``correct(ids, readings)``, for the env's hot path:
         the same kernels and results, without converting the arrays. They must already be what the simulator
         hands out: float64 ``control`` (width,) and C-contiguous ``control_cov`` (width, width), int64 ``ids``
-        (m,), C-contiguous float64 ``readings`` (m, 2) (anything else raises ``TypeError``; the kernels still
-        check values, and
-        a bad id or reading raises after the prediction). Returns the change of log det Sigma."""
+        (m,), C-contiguous float64 ``readings`` (m, 2); anything else raises ``TypeError``. The kernels still
+        check values: a bad id or reading raises after the prediction. Returns the change of log det Sigma."""
         width = self._width
         if not (
             control.shape == (width,)
