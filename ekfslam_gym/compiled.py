@@ -37,6 +37,11 @@ KERNELS: dict[str, tuple[str, str, str]] = {
         f"Tuple((f8, i8, i8))({_F8_1}, {_F8_2}, {_F8_2}, b1[::1], i8[::1], {_F8_2}, {_F8_2}, f8, b1, b1, b1, "
         f"i8, i8, {_F8_1}, {_F8_2}, f8[:, :, ::1], i8[::1])",
     ),
+    "associate": (
+        "ekfslam_gym.filter.association_kernels",
+        "associate",
+        f"i8({_F8_1}, {_F8_2}, b1[::1], {_F8_2}, {_F8_2}, f8, i8, {_F8_1}, i8, i8[::1], {_F8_1})",
+    ),
     "min_wall_distance": ("ekfslam_gym.sim.geometry", "min_wall_distance", f"{_F8_1}({_F8_2}, {_F8_2})"),
     "visible_landmarks": (
         "ekfslam_gym.sim.geometry",
@@ -95,6 +100,7 @@ SOURCES: tuple[str, ...] = (
     "filter/codes.py",
     "filter/models.py",
     "filter/kernels.py",
+    "filter/association_kernels.py",
     "sim/geometry.py",
     "sim/odometry_kernels.py",
     "envs/kernels.py",

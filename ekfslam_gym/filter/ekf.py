@@ -15,7 +15,8 @@ import numpy as np
 
 from .. import compiled
 from ..angles import wrap_angle
-from . import codes
+from . import association, codes
+from .association import UnknownCorrection
 
 COURSE_MOTION_NOISE = np.diag([0.1, 0.1, 0.01])
 COURSE_MEASUREMENT_NOISE = 0.01 * np.eye(2)
@@ -191,6 +192,8 @@ class EKFSLAM:
         # First estimates: the pose as the last prediction left it, each landmark as it was initialised.
         self._prior_pose = self._mean[:3].copy()
         self._first = np.zeros((self.n_landmarks, 2))
+        # correct_unknown's tentative landmarks: corrections left to be matched again before being forgotten.
+        self._tentative = np.zeros(self.n_landmarks, dtype=np.int64)
         # The Jacobians last used (see ``Jacobians``), written by the kernels.
         self._G_used = np.eye(3)
         self._H_used = np.zeros((max(16, self.n_landmarks), 2, 5))
@@ -345,6 +348,110 @@ class EKFSLAM:
             raise FilterDivergedError("innovation covariance is not positive definite")
         self._after_call(delta)
         return delta
+
+    # ------------------------------------------------------------------ unknown correspondences
+    def associate(
+        self, readings, method: association.Method = "jcbc", gate: float = association.DEFAULT_GATE, *,
+        measurement_cov=None,
+    ) -> np.ndarray:  # fmt: skip
+        """The initialised landmark slot each reading (m, 2) comes from, -1 for none (new, clutter or ambiguous).
+
+        ``method``: ``"nearest"`` (each reading alone takes its most likely landmark inside the gate) or
+        ``"jcbc"`` (joint compatibility branch and bound, Neira & Tardos 2001: the most pairings whose stacked
+        innovation passes the joint test). ``gate``: the probability of the chi-squared gates (2k degrees of
+        freedom for k pairings). Changes nothing.
+        """
+        return self._associate(readings, method, gate, measurement_cov)[0]
+
+    def correct_unknown(
+        self, readings, method: association.Method = "jcbc", gate: float = association.DEFAULT_GATE,
+        new_gate: float = association.DEFAULT_NEW_GATE, *, confirm_within: int = 0, measurement_cov=None,
+    ) -> UnknownCorrection:  # fmt: skip
+        """Associate the readings (m, 2) with ``associate``, then correct with the matched ones as ``correct``
+        does, initialising new landmarks: a reading that matches nothing and lies outside the ``new_gate``
+        chi-squared gate (2 dof) of every initialised landmark starts one in the first free slot (none left:
+        discarded); readings between the two gates are discarded, being neither clearly known nor clearly new.
+
+        ``confirm_within`` > 0 makes a new landmark tentative: unless one of the next ``confirm_within`` calls
+        matches a reading to it, it is forgotten (``forget``), so clutter does not fill the fixed-size state.
+        (A simple form of the provisional landmark list of Thrun, Burgard & Fox, sec. 10.3.) Returns an
+        ``UnknownCorrection`` (slots used, which were new, slots forgotten, change of log det Sigma).
+        """
+        association.check_probability(new_gate, "new_gate")
+        if new_gate < gate:
+            raise ValueError(f"new_gate must be >= gate, got {new_gate!r} < {gate!r}")
+        if isinstance(confirm_within, bool) or not isinstance(confirm_within, (int, np.integer)) or confirm_within < 0:
+            raise ValueError(f"confirm_within must be an integer >= 0, got {confirm_within!r}")
+        slots, nearest, readings = self._associate(readings, method, gate, measurement_cov)
+        new = np.zeros(slots.shape[0], dtype=bool)
+        candidates = np.flatnonzero((slots < 0) & (nearest > association.gate_table(new_gate, 1)[0]))
+        if candidates.size:
+            free = np.flatnonzero(~self._observed)[: candidates.size]
+            slots[candidates[: free.size]] = free
+            new[candidates[: free.size]] = True
+        use = slots >= 0
+        delta = self.correct(slots[use], readings[use], measurement_cov=measurement_cov)
+        # A reading too close to initialise in inverse mode leaves its slot free: it was not used.
+        dropped = new & ~self._observed[np.maximum(slots, 0)]
+        slots[dropped] = -1
+        new[dropped] = False
+        forgotten = np.empty(0, dtype=np.int64)
+        tentative = self._tentative
+        if np.any(tentative):
+            tentative[slots[use & ~new]] = 0
+            waiting = tentative > 0
+            tentative[waiting] -= 1
+            forgotten = np.flatnonzero(waiting & (tentative == 0))
+            for slot in forgotten:
+                delta += self.forget(int(slot))
+        if confirm_within:
+            tentative[slots[new]] = confirm_within
+        return UnknownCorrection(slots, new, forgotten, delta)
+
+    def forget(self, index: int) -> float:
+        """Return landmark slot ``index`` to the unseen prior (mean 0, variance ``landmark_prior``, no
+        correlations), free for a new landmark; returns the change of log det Sigma.
+
+        Marginalising a landmark out of a Gaussian drops its rows and columns; putting the independent prior
+        back keeps the state's size. log det Sigma and P are then recomputed exactly (``resync``, O(N^3)): it
+        happens only when a tentative landmark is dropped.
+        """
+        if not 0 <= index < self.n_landmarks:
+            raise IndexError(f"landmark index {index} outside [0, {self.n_landmarks})")
+        j = 3 + 2 * index
+        self._cov[j : j + 2, :] = 0.0
+        self._cov[:, j : j + 2] = 0.0
+        self._cov[j, j] = self._cov[j + 1, j + 1] = self.landmark_prior
+        self._mean[j : j + 2] = 0.0
+        self._first[index] = 0.0
+        self._observed[index] = False
+        self._tentative[index] = 0
+        before = self._log_det
+        if not self._tracking:
+            return 0.0
+        self.resync()
+        return self._log_det - before
+
+    def _associate(self, readings, method, gate, measurement_cov):
+        """(slots, each reading's smallest Mahalanobis distance to a landmark, the readings as (m, 2) floats)."""
+        code = association.check_method(method)
+        gates = association.gate_table(gate, self.n_landmarks)
+        readings = np.ascontiguousarray(np.asarray(readings, dtype=float).reshape(-1, 2))
+        if not np.all(np.isfinite(readings)):
+            raise ValueError("readings must be finite")
+        Q = (
+            self.measurement_noise
+            if measurement_cov is None
+            else _as_covariance(measurement_cov, 2, "measurement_cov")
+        )
+        m = readings.shape[0]
+        slots = np.empty(m, dtype=np.int64)
+        nearest = np.empty(m)
+        compiled.associate(
+            self._mean, self._cov, self._observed, readings, Q, self.min_range, code, gates,
+            association.MAX_NODES, slots, nearest,
+        )  # fmt: skip
+        return slots, nearest, readings
 
     def _after_call(self, delta: float) -> None:
         if self._tracking:
