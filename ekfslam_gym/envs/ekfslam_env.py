@@ -200,6 +200,9 @@ class EKFSLAMEnv(gym.Env):
         self._last_seen = np.full(layout.n_landmarks, -1, dtype=np.int64)
         known = f.association == "known"
         self._slot_truth = np.arange(layout.n_landmarks) if known else np.full(layout.n_landmarks, -1)
+        # The true position each slot holds and which initialised slots hold one (unknown association only).
+        self._slot_landmarks = self._true_landmarks.copy() if known else np.zeros_like(self._true_landmarks)
+        self._slot_valid = np.zeros(layout.n_landmarks, dtype=bool)
         self._false_associations = 0
         self._missed_associations = 0
         self._t = 0
@@ -368,46 +371,40 @@ class EKFSLAMEnv(gym.Env):
     def _correct_unknown(self, readings: Readings) -> np.ndarray:
         """Correct with the step's readings without telling the filter their ids (``filter.association``), or,
         with known association, without the clutter. Counts false and missed associations against the true
-        ids, fills the slot -> true landmark map for new slots, keeps what the filter used as the step's
-        readings (ids their slots) and returns the slots read."""
+        ids and keeps the slot -> true landmark map (``association_truth``); keeps what the filter used as
+        the step's readings (ids their slots) and returns the slots read."""
         ekf, f = self._ekf, self.config.filter
         ids, z = readings
         if f.association == "known":
             keep = ids >= 0
             ids, z = ids[keep], z[keep]
             ekf.correct(ids, z)
+            self._slot_valid[:] = ekf.observed
             self._last_readings = Readings(ids, z)
             return ids
-        # Bearing order: the sensor's id order (clutter last) would tell the filter which readings are false.
-        order = np.argsort(z[:, 1], kind="stable")
-        z, truth = z[order], ids[order]
+        if z.shape[0] > 1:
+            # Bearing order: the sensor's id order (clutter last) would tell the filter which readings are false.
+            order = np.argsort(z[:, 1], kind="stable")
+            z, ids = z[order], ids[order]
         slots, new, forgotten, _ = ekf.correct_unknown(
             z, f.association, f.gate_prob, f.new_gate_prob, confirm_within=f.confirm_steps
         )
-        self._slot_truth[forgotten] = -1
-        self._slot_truth[slots[new]] = truth[new]
-        used = slots >= 0
-        # A reading matched to a slot holding another landmark, or clutter matched to any slot, is a false
-        # association; starting a new (tentative) landmark is not an association.
-        wrong = used & ~new & ((truth < 0) | (self._slot_truth[np.maximum(slots, 0)] != truth))
-        self._false_associations += int(np.count_nonzero(wrong))
-        # A slot that clutter started holds no landmark until a true one's reading is matched to it (counted
-        # false once above): from then on it stands for that landmark.
-        adopt = used & (truth >= 0) & (self._slot_truth[np.maximum(slots, 0)] < 0)
-        self._slot_truth[slots[adopt]] = truth[adopt]
-        self._missed_associations += int(np.count_nonzero((truth >= 0) & ~used))
-        read = slots[used]
-        self._last_readings = Readings(read, z[used])
+        false, missed, read, read_z = compiled.tally_associations(
+            ids, z, slots, new, forgotten, ekf.observed, self._slot_truth, self._true_landmarks,
+            self._slot_landmarks, self._slot_valid,
+        )  # fmt: skip
+        self._false_associations += false
+        self._missed_associations += missed
+        self._last_readings = Readings(read, read_z)
         return read
 
     def _unknown_metrics(self, read_slots: np.ndarray):
         """``compiled.step_metrics`` with each slot scored against the true landmark it holds (slots of clutter
         and free slots count as unseen, so the done_std end waits for every slot to hold a true landmark)."""
-        mean, cov, observed, _ = self._belief
-        truth = self._slot_truth
+        mean, cov, _, _ = self._belief
         return compiled.step_metrics(
-            mean, cov, observed & (truth >= 0), self._world.pose_tuple, self._true_landmarks[np.maximum(truth, 0)],
-            read_slots, self._last_seen, self._t, self.config.loop_gap,
+            mean, cov, self._slot_valid, self._world.pose_tuple, self._slot_landmarks, read_slots,
+            self._last_seen, self._t, self.config.loop_gap,
         )  # fmt: skip
 
     def _failed_step(self, inner: list | None = None):

@@ -22,6 +22,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .codes import BAD_INPUT, OK
+from .kernels import correct
 from .models import range_bearing, wrap_angle
 
 METHOD_NEAREST = 1
@@ -265,3 +267,75 @@ def _extend(cov, Hx, Hm, zhat, pair_slot, k, j, nu_new, Q, L, y, d2_at, gates):
     y[rows + 1] = y1
     d2_at[k + 1] = d2
     return True
+
+
+@njit(cache=True)
+def correct_unknown(
+    mean, cov, P, observed, readings, Q, min_range, course_init, sequential, track, variant, iterations,
+    prior_pose, first, H_used, H_slots, method, gates, new_gate, max_nodes, confirm_within, tentative, slots,
+    new, forget,
+):  # fmt: skip
+    """Associate (``associate``), start new landmarks, correct (``kernels.correct``) and keep the tentative
+    landmarks' countdowns, in one call.
+
+    A reading matched to nothing whose smallest Mahalanobis distance exceeds ``new_gate`` takes the next free
+    slot (none left: dropped). Writes ``slots`` (m,) (-1: discarded), ``new`` (m,) and, in ``forget``, the
+    tentative slots whose countdown ran out (the caller resets them). ``tentative`` (n,) counts the calls a
+    new landmark has left to be matched again; ``confirm_within`` > 0 starts it for this call's new ones.
+    Returns (change of log det Sigma, status, readings used in the update, number of slots to forget).
+    """
+    m = readings.shape[0]
+    n = observed.shape[0]
+    for i in range(m):
+        if not (math.isfinite(readings[i, 0]) and math.isfinite(readings[i, 1])):
+            return 0.0, BAD_INPUT, 0, 0
+    nearest = np.empty(m)
+    associate(mean, cov, observed, readings, Q, min_range, method, gates, max_nodes, slots, nearest)
+    free = 0
+    n_use = 0
+    for i in range(m):
+        new[i] = False
+        if slots[i] < 0 and nearest[i] > new_gate:
+            while free < n and observed[free]:
+                free += 1
+            if free < n:
+                slots[i] = free
+                new[i] = True
+                free += 1
+        if slots[i] >= 0:
+            n_use += 1
+    ids = np.empty(n_use, np.int64)
+    chosen = np.empty((n_use, 2))
+    a = 0
+    for i in range(m):
+        if slots[i] >= 0:
+            ids[a] = slots[i]
+            chosen[a, 0] = readings[i, 0]
+            chosen[a, 1] = readings[i, 1]
+            a += 1
+    delta, status, used = correct(
+        mean, cov, P, observed, ids, chosen, Q, min_range, course_init, sequential, track, variant, iterations,
+        prior_pose, first, H_used, H_slots,
+    )  # fmt: skip
+    if status != OK:
+        return delta, status, used, 0
+    for i in range(m):
+        # A reading too close to initialise (inverse mode) leaves its slot free: it was not used.
+        if new[i] and not observed[slots[i]]:
+            slots[i] = -1
+            new[i] = False
+    for i in range(m):
+        if slots[i] >= 0 and not new[i]:
+            tentative[slots[i]] = 0
+    n_forget = 0
+    for j in range(n):
+        if tentative[j] > 0:
+            tentative[j] -= 1
+            if tentative[j] == 0:
+                forget[n_forget] = j
+                n_forget += 1
+    if confirm_within > 0:
+        for i in range(m):
+            if new[i]:
+                tentative[slots[i]] = confirm_within
+    return delta, OK, used, n_forget
