@@ -130,7 +130,7 @@ def test_running_log_det_stays_exact_through_association_initialisation_and_forg
                   resync_every=0)  # fmt: skip
     pose = np.zeros(3)
     forgotten = new = 0
-    for step in range(60):
+    for _ in range(60):
         control = np.array([rng.uniform(-0.3, 0.3), rng.uniform(0, 0.3), rng.uniform(-0.3, 0.3)])
         pose = np.array([
             pose[0] + control[1] * math.cos(pose[2] + control[0]),
@@ -256,7 +256,9 @@ def _drive(env, steps, seed=0):
 
 
 def test_env_with_jcbc_and_clutter_passes_the_checker_and_counts():
-    env = gym.make("EKFSLAM-v0", filter={"association": "jcbc"}, sensor={"clutter_rate": 0.5, "detection_prob": 0.9})
+    env = gym.make(
+        "EKFSLAM-v0", filter={"association": "jcbc"}, sensor={"clutter_rate": 0.5, "detection_prob": 0.9}
+    )
     check_env(env.unwrapped, skip_render_check=True)
     _, info = env.reset(seed=3)
     assert info["false_associations"] == 0 and info["missed_associations"] == 0
@@ -282,3 +284,26 @@ def test_known_association_counts_nothing(sensor):
     assert info["false_associations"] == 0 and info["missed_associations"] == 0
     np.testing.assert_array_equal(env.unwrapped.slot_truth, np.arange(30))
     assert np.all(info["readings"].ids >= 0)
+
+
+def test_evaluation_reports_the_counts_and_scores_slots_by_the_landmark_they_hold():
+    from ekfslam_gym.evaluation.episodes import ASSOCIATION_KEYS, METRIC_KEYS, evaluate_agent
+
+    class Held:
+        name = "held"
+
+        def reset(self, env, seed=None):
+            self.rng, self.t = np.random.default_rng(seed), 0
+
+        def act(self, observation):
+            if self.t % 10 == 0:
+                self.action = self.rng.uniform(-1, 1, 2).astype(np.float32)
+            self.t += 1
+            return self.action
+
+    kwargs = {"filter": {"association": "jcbc"}, "sensor": {"clutter_rate": 0.5}}
+    (row,) = evaluate_agent(Held(), "EKFSLAM-v0", [4], kwargs, max_episode_steps=120)
+    assert set(METRIC_KEYS + ASSOCIATION_KEYS) <= set(row)
+    assert row["landmark_rmse"] < 0.5 and 0 < row["seen_fraction"] <= 1
+    (known,) = evaluate_agent(Held(), "EKFSLAM-v0", [4], None, max_episode_steps=120)
+    assert not set(ASSOCIATION_KEYS) & set(known)

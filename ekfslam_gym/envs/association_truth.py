@@ -15,7 +15,9 @@ from numba import njit
 
 
 @njit(cache=True)
-def tally_associations(truth, z, slots, new, forgotten, observed, slot_truth, true_landmarks, slot_landmarks, valid):
+def tally_associations(
+    truth, z, slots, new, forgotten, observed, slot_truth, true_landmarks, slot_landmarks, valid
+):
     """Update ``slot_truth`` (n,) and ``slot_landmarks`` (n, 2) (the true position each slot holds) for the
     step's readings (true ids ``truth`` (m,), readings ``z`` (m, 2), the filter's ``slots`` (m,) and ``new``
     (m,)) and ``forgotten`` slots; write ``valid`` (n,): initialised slots that hold a true landmark.

@@ -92,6 +92,24 @@ class EKFSLAMEnv(gym.Env):
     neither the registered one, raise ``ValueError``. Built without ``gym.make`` (or with
     ``max_episode_steps=-1``), the env truncates itself at ``config.max_episode_steps``.
 
+    ## Data association
+    By default the filter is told which landmark each reading comes from (``filter.association = "known"``).
+    ``sensor.detection_prob`` < 1 drops readings of visible landmarks; ``sensor.clutter_rate`` > 0 adds false
+    readings (a Poisson number per step, uniform in range and bearing over the field of view, true id -1),
+    which known association drops as an oracle would. With ``filter.association`` ``"nearest"`` or ``"jcbc"``
+    (joint compatibility branch and bound, Neira & Tardos 2001) the filter gets the readings without ids, in
+    bearing order, and associates them itself (``EKFSLAM.correct_unknown``): a reading inside the
+    ``filter.gate_prob`` chi-squared gate of a landmark may be matched to it; one outside the
+    ``filter.new_gate_prob`` gate of every landmark starts a new one in the first free slot, tentatively (it is
+    forgotten, its slot freed, unless matched again within ``filter.confirm_steps`` steps); readings between
+    the gates are discarded. A slot then need not hold the landmark of the same index: ``slot_truth`` (n,)
+    names the true landmark each slot holds (-1: free or started by clutter), and ``map_rmse``,
+    ``landmarks_seen`` and the ``done_std`` end score each slot against the landmark it holds (a slot of
+    clutter counts as unseen). ``info["false_associations"]`` counts, over the episode, readings matched to a
+    slot holding another landmark or clutter matched to any slot; ``info["missed_associations"]`` readings of
+    true landmarks neither matched nor starting a landmark; both are 0 with known association.
+    ``info["readings"]`` holds the readings the filter used, their ids the slots it used them for.
+
     ## Arguments
     ``gymnasium.make("EKFSLAM-v0", config=None, render_mode=None, **overrides)``: ``config`` is an
     ``EnvConfig``, a path to a YAML file (see ``configs/env/``) or a mapping of sections, and replaces the id's

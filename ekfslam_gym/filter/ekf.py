@@ -389,7 +389,11 @@ class EKFSLAM:
         ``UnknownCorrection`` (slots used, which were new, slots forgotten, change of log det Sigma).
         """
         code, gates, new_threshold = self._association_settings(method, gate, new_gate)
-        if isinstance(confirm_within, bool) or not isinstance(confirm_within, (int, np.integer)) or confirm_within < 0:
+        if (
+            isinstance(confirm_within, bool)
+            or not isinstance(confirm_within, (int, np.integer))
+            or confirm_within < 0
+        ):
             raise ValueError(f"confirm_within must be an integer >= 0, got {confirm_within!r}")
         readings = self._readings(readings)
         m = readings.shape[0]
@@ -425,7 +429,11 @@ class EKFSLAM:
         back keeps the state's size. log det Sigma and P are then recomputed exactly (``resync``, O(N^3)): it
         happens only when a tentative landmark is dropped.
         """
-        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < self.n_landmarks:
+        if (
+            isinstance(index, bool)
+            or not isinstance(index, (int, np.integer))
+            or not 0 <= index < self.n_landmarks
+        ):
             raise IndexError(f"landmark index {index!r} outside [0, {self.n_landmarks})")
         return self._forget(np.array([index]))
 
