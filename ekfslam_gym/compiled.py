@@ -37,6 +37,17 @@ KERNELS: dict[str, tuple[str, str, str]] = {
         f"Tuple((f8, i8, i8))({_F8_1}, {_F8_2}, {_F8_2}, b1[::1], i8[::1], {_F8_2}, {_F8_2}, f8, b1, b1, b1, "
         f"i8, i8, {_F8_1}, {_F8_2}, f8[:, :, ::1], i8[::1])",
     ),
+    "associate": (
+        "ekfslam_gym.filter.association_kernels",
+        "associate",
+        f"i8({_F8_1}, {_F8_2}, b1[::1], {_F8_2}, {_F8_2}, f8, i8, {_F8_1}, i8, i8[::1], {_F8_1})",
+    ),
+    "correct_unknown": (
+        "ekfslam_gym.filter.association_kernels",
+        "correct_unknown",
+        f"Tuple((f8, i8, i8, i8))({_F8_1}, {_F8_2}, {_F8_2}, b1[::1], {_F8_2}, {_F8_2}, f8, b1, b1, b1, i8, i8, "
+        f"{_F8_1}, {_F8_2}, f8[:, :, ::1], i8[::1], i8, {_F8_1}, f8, i8, i8, i8[::1], i8[::1], b1[::1], i8[::1])",
+    ),
     "min_wall_distance": ("ekfslam_gym.sim.geometry", "min_wall_distance", f"{_F8_1}({_F8_2}, {_F8_2})"),
     "visible_landmarks": (
         "ekfslam_gym.sim.geometry",
@@ -64,6 +75,12 @@ KERNELS: dict[str, tuple[str, str, str]] = {
         "ekfslam_gym.sim.odometry_kernels",
         "velocity_reading",
         f"void(f8, f8, f8, f8, f8, f8, f8, {_F8_1}, {_F8_1}, {_F8_1}, {_F8_2}, {_F8_1})",
+    ),
+    "tally_associations": (
+        "ekfslam_gym.envs.association_truth",
+        "tally_associations",
+        f"Tuple((i8, i8, i8[::1], {_F8_2}))(i8[::1], {_F8_2}, i8[::1], b1[::1], i8[::1], b1[::1], i8[::1], {_F8_2}, "
+        f"{_F8_2}, b1[::1])",
     ),
     "mark_coverage": (
         "ekfslam_gym.envs.kernels",
@@ -95,10 +112,12 @@ SOURCES: tuple[str, ...] = (
     "filter/codes.py",
     "filter/models.py",
     "filter/kernels.py",
+    "filter/association_kernels.py",
     "sim/geometry.py",
     "sim/odometry_kernels.py",
     "envs/kernels.py",
     "envs/observation_codes.py",
+    "envs/association_truth.py",
 )
 AOT_MODULE = "ekfslam_gym._aot"
 

@@ -9,6 +9,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 EXPECTED = {
+    "association.py": "jcbc / known",
     "consistency.py": "median ANEES",
     "decisions.py": "time per act() call",
     "ekf.py": "landmarks",

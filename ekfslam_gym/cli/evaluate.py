@@ -25,7 +25,14 @@ from pathlib import Path
 from typing import Any
 
 from ..evaluation.aggregate import summary
-from ..evaluation.episodes import HELD_OUT_SEEDS, METRIC_KEYS, NEES_STEP_BOUNDS, SMOOTHER_KEYS, evaluate_agent
+from ..evaluation.episodes import (
+    ASSOCIATION_KEYS,
+    HELD_OUT_SEEDS,
+    METRIC_KEYS,
+    NEES_STEP_BOUNDS,
+    SMOOTHER_KEYS,
+    evaluate_agent,
+)
 from ..evaluation.report import json_safe, markdown_table, plot_results, text_summary
 from .common import parse_seeds
 
@@ -157,6 +164,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             )  # fmt: skip
         episodes[label] = rows
     keys = METRIC_KEYS + (SMOOTHER_KEYS if args.smoother else ())
+    # Unknown data association (filter.association in the env settings) adds its counts to every row.
+    every_row = [row for rows in episodes.values() for row in rows]
+    if every_row and all(key in row for row in every_row for key in ASSOCIATION_KEYS):
+        keys += ASSOCIATION_KEYS
     summaries = {label: summary(label, rows, keys=keys) for label, rows in episodes.items()}
 
     if args.table:

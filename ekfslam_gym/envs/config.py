@@ -83,6 +83,14 @@ class FilterConfig:
     which every unseen landmark is carried, so log det Sigma is finite and discovering a landmark pays a
     bounded amount. pose_prior: initial pose variance (m^2 and rad^2; small and positive, so Sigma_0 is
     definite). resync_every: filter calls between exact Cholesky re-synchronisations of the running log det.
+    association: how readings find their landmarks: ``known`` (the sensor's ids, the default; clutter is
+    dropped, as an oracle would), ``nearest`` (each reading alone takes its most likely landmark inside the
+    gate) or ``jcbc`` (joint compatibility branch and bound, Neira & Tardos 2001), the latter two from the
+    readings alone (``ekfslam_gym.filter.association``). gate_prob: probability of the chi-squared association
+    gates. new_gate_prob (>= gate_prob): a reading that matches nothing and lies outside this gate of every
+    landmark starts a new one in a free slot; between the gates it is discarded. confirm_steps: a new landmark
+    not matched again within this many control steps is forgotten (its slot freed, so clutter does not fill
+    the map; 0: never).
     """
 
     motion_model: str = "odometry"
@@ -93,6 +101,10 @@ class FilterConfig:
     landmark_prior: float = 100.0
     pose_prior: float = 1e-6
     resync_every: int = 1000
+    association: str = "known"
+    gate_prob: float = 0.99
+    new_gate_prob: float = 0.999
+    confirm_steps: int = 5
 
     def __post_init__(self) -> None:
         _require(self.motion_model in ("odometry", "velocity", "wheels"), "filter.motion_model", "must be odometry|velocity|wheels", self.motion_model)  # fmt: skip
@@ -112,6 +124,20 @@ class FilterConfig:
         _positive("filter.landmark_prior", self.landmark_prior)
         _positive("filter.pose_prior", self.pose_prior)
         _integer("filter.resync_every", self.resync_every, 0)
+        _require(
+            self.association in ("known", "nearest", "jcbc"),
+            "filter.association",
+            "must be known|nearest|jcbc",
+            self.association,
+        )
+        for name in ("gate_prob", "new_gate_prob"):
+            value = getattr(self, name)
+            _require(isinstance(value, (int, float)) and 0.0 < value < 1.0, f"filter.{name}", "must be in (0, 1)", value)  # fmt: skip
+        _integer("filter.confirm_steps", self.confirm_steps, 0)
+        _require(
+            self.new_gate_prob >= self.gate_prob, "filter.new_gate_prob", "must be >= filter.gate_prob",
+            self.new_gate_prob,
+        )  # fmt: skip
 
 
 def _check_reward_weights(self: Any) -> None:

@@ -13,6 +13,7 @@ import numpy as np
 from .. import compiled
 from ..filter.ekf import EKFSLAM, FilterDivergedError
 from ..sim.layouts import make_layout
+from ..sim.sensor import Readings
 from ..sim.world import World
 from .actions import clipped_velocity, make_interface
 from .config import EnvConfig
@@ -91,6 +92,24 @@ class EKFSLAMEnv(gym.Env):
     neither the registered one, raise ``ValueError``. Built without ``gym.make`` (or with
     ``max_episode_steps=-1``), the env truncates itself at ``config.max_episode_steps``.
 
+    ## Data association
+    By default the filter is told which landmark each reading comes from (``filter.association = "known"``).
+    ``sensor.detection_prob`` < 1 drops readings of visible landmarks; ``sensor.clutter_rate`` > 0 adds false
+    readings (a Poisson number per step, uniform in range and bearing over the field of view, true id -1),
+    which known association drops as an oracle would. With ``filter.association`` ``"nearest"`` or ``"jcbc"``
+    (joint compatibility branch and bound, Neira & Tardos 2001) the filter gets the readings without ids, in
+    bearing order, and associates them itself (``EKFSLAM.correct_unknown``): a reading inside the
+    ``filter.gate_prob`` chi-squared gate of a landmark may be matched to it; one outside the
+    ``filter.new_gate_prob`` gate of every landmark starts a new one in the first free slot, tentatively (it is
+    forgotten, its slot freed, unless matched again within ``filter.confirm_steps`` steps); readings between
+    the gates are discarded. A slot then need not hold the landmark of the same index: ``slot_truth`` (n,)
+    names the true landmark each slot holds (-1: free or started by clutter), and ``map_rmse``,
+    ``landmarks_seen`` and the ``done_std`` end score each slot against the landmark it holds (a slot of
+    clutter counts as unseen). ``info["false_associations"]`` counts, over the episode, readings matched to a
+    slot holding another landmark or clutter matched to any slot; ``info["missed_associations"]`` readings of
+    true landmarks neither matched nor starting a landmark; both are 0 with known association.
+    ``info["readings"]`` holds the readings the filter used, their ids the slots it used them for.
+
     ## Arguments
     ``gymnasium.make("EKFSLAM-v0", config=None, render_mode=None, **overrides)``: ``config`` is an
     ``EnvConfig``, a path to a YAML file (see ``configs/env/``) or a mapping of sections, and replaces the id's
@@ -158,6 +177,8 @@ class EKFSLAMEnv(gym.Env):
         self._v_max, self._omega_max = config.robot.v_max, config.robot.omega_max
         self._done_variance = config.done_std**2 if config.done_std > 0 else -math.inf
         self._max_steps = config.max_episode_steps
+        # Readings go through ``_correct_unknown`` when the filter associates them itself, or to drop clutter.
+        self._unknown = config.filter.association != "known" or config.sensor.clutter_rate > 0
         self._world: World | None = None
         self._ekf: EKFSLAM | None = None
         self._belief: tuple[np.ndarray, ...] | None = None
@@ -195,6 +216,13 @@ class EKFSLAMEnv(gym.Env):
         self._true_landmarks = np.ascontiguousarray(layout.landmarks, dtype=np.float64)
         self._memory = make_memory(self._bounds, cfg.observation.memory_resolution)
         self._last_seen = np.full(layout.n_landmarks, -1, dtype=np.int64)
+        known = f.association == "known"
+        self._slot_truth = np.arange(layout.n_landmarks) if known else np.full(layout.n_landmarks, -1)
+        # The true position each slot holds and which initialised slots hold one (unknown association only).
+        self._slot_landmarks = self._true_landmarks.copy() if known else np.zeros_like(self._true_landmarks)
+        self._slot_valid = np.zeros(layout.n_landmarks, dtype=bool)
+        self._false_associations = 0
+        self._missed_associations = 0
         self._t = 0
         self._steps = 0
         self._loop_closures = 0
@@ -207,7 +235,11 @@ class EKFSLAMEnv(gym.Env):
         self._trail_est: list[tuple[float, float]] = []
 
         readings = self._world.sense(rng)
-        ekf.correct(readings.ids, readings.z)
+        if self._unknown:
+            read = self._correct_unknown(readings)
+            readings = self._last_readings  # what the filter used, ids their slots
+        else:
+            ekf.correct(readings.ids, readings.z)
         self._log_det = self._prev_log_det = ekf.log_det
         self._belief = self._belief_views()
         mean, cov, observed, _ = self._belief
@@ -218,10 +250,13 @@ class EKFSLAMEnv(gym.Env):
         self._odometry = np.zeros(2 if f.motion_model == "velocity" else 3)
         self._odometry_cov = np.zeros((self._odometry.size, self._odometry.size))
         self._newly_covered = self._mark_and_trail()
-        nees, rmse, _, self._worst_variance, seen = compiled.step_metrics(
-            mean, cov, observed, self._world.pose_tuple, self._true_landmarks, readings.ids, self._last_seen,
-            self._t, cfg.loop_gap,
-        )  # fmt: skip
+        if self._unknown:
+            nees, rmse, _, self._worst_variance, seen = self._unknown_metrics(read)
+        else:
+            nees, rmse, _, self._worst_variance, seen = compiled.step_metrics(
+                mean, cov, observed, self._world.pose_tuple, self._true_landmarks, readings.ids,
+                self._last_seen, self._t, cfg.loop_gap,
+            )  # fmt: skip
         info = self._info({"info_gain": 0.0}, nees, rmse, seen)
         if self.render_mode == "human":
             self.render()
@@ -280,6 +315,8 @@ class EKFSLAMEnv(gym.Env):
         """One control step of ``dt`` with the normalised command (a0, a1) already clipped: physics, odometry,
         readings, filter, reward terms and metrics. Returns (terms, reward, terminated, nees, rmse, seen,
         failed); the caller builds the observation and info once per env step."""
+        if self._unknown:
+            return self._unknown_control_step(a0, a1)
         ekf = self._ekf
         world, rng = self._world, self.np_random
         x0, y0, _ = world.pose_tuple
@@ -313,6 +350,79 @@ class EKFSLAMEnv(gym.Env):
         )  # fmt: skip
         self._loop_closures += closures
         return terms, reward, self._is_terminated(), nees, rmse, seen, False
+
+    def _unknown_control_step(self, a0: float, a1: float):
+        """``_control_step`` with the readings associated by the filter (``_correct_unknown``) and the metrics
+        taken through the slot -> true landmark map (``_unknown_metrics``)."""
+        ekf = self._ekf
+        world, rng = self._world, self.np_random
+        x0, y0, _ = world.pose_tuple
+        collided = world.step(a0 * self._v_max, a1 * self._omega_max)
+        x1, y1, _ = world.pose_tuple
+        self._path_length += math.hypot(x1 - x0, y1 - y0)
+        self._collisions += collided
+        odometry = self._read_odometry(rng)
+        readings = world.sense(rng)
+        self._odometry, self._odometry_cov = odometry.u, odometry.cov
+        self._t += 1
+        self._action = (a0, a1)
+        self._collided = collided
+
+        try:
+            ekf.predict(odometry.u, control_cov=odometry.cov)
+            read = self._correct_unknown(readings)
+            failed = not math.isfinite(ekf.log_det)
+        except FilterDivergedError:
+            failed = True
+        if failed:
+            return None, 0.0, True, math.nan, math.nan, 0, True
+
+        self._prev_log_det, self._log_det = self._log_det, ekf.log_det
+        self._newly_covered = self._mark_and_trail()
+        terms = self._rewards()
+        reward = sum(terms.values(), 0.0)
+        nees, rmse, closures, self._worst_variance, seen = self._unknown_metrics(read)
+        self._loop_closures += closures
+        return terms, reward, self._is_terminated(), nees, rmse, seen, False
+
+    def _correct_unknown(self, readings: Readings) -> np.ndarray:
+        """Correct with the step's readings without telling the filter their ids (``filter.association``), or,
+        with known association, without the clutter. Counts false and missed associations against the true
+        ids and keeps the slot -> true landmark map (``association_truth``); keeps what the filter used as
+        the step's readings (ids their slots) and returns the slots read."""
+        ekf, f = self._ekf, self.config.filter
+        ids, z = readings
+        if f.association == "known":
+            keep = ids >= 0
+            ids, z = ids[keep], z[keep]
+            ekf.correct(ids, z)
+            self._slot_valid[:] = ekf.observed
+            self._last_readings = Readings(ids, z)
+            return ids
+        if z.shape[0] > 1:
+            # Bearing order: the sensor's id order (clutter last) would tell the filter which readings are false.
+            order = np.argsort(z[:, 1], kind="stable")
+            z, ids = z[order], ids[order]
+        slots, new, forgotten, _ = ekf.correct_unknown(
+            z, f.association, f.gate_prob, f.new_gate_prob, confirm_within=f.confirm_steps
+        )
+        false, missed, read, read_z = compiled.tally_associations(
+            ids, z, slots, new, forgotten, ekf.observed, self._slot_truth, self._true_landmarks,
+            self._slot_landmarks, self._slot_valid,
+        )  # fmt: skip
+        self._false_associations += false
+        self._missed_associations += missed
+        self._last_readings = Readings(read, read_z)
+        return read
+
+    def _unknown_metrics(self, read_slots: np.ndarray):
+        """``compiled.step_metrics`` with each slot scored against the true landmark it holds (slots of clutter
+        and free slots count as unseen, so the done_std end waits for every slot to hold a true landmark)."""
+        mean, cov, _, _ = self._belief
+        return compiled.step_metrics(
+            mean, cov, self._slot_valid, self._world.pose_tuple, self._slot_landmarks, read_slots,
+            self._last_seen, self._t, self.config.loop_gap,
+        )  # fmt: skip
 
     def _failed_step(self, inner: list | None = None):
         """The step on which the filter failed numerically: terminated, reward 0, the last observation."""
@@ -390,6 +500,8 @@ class EKFSLAMEnv(gym.Env):
             # A (ids, z) named tuple, not arrays: the number of readings varies, and vector envs stack arrays.
             "readings": self._last_readings,
             "filter_failed": self._filter_failed,
+            "false_associations": self._false_associations,
+            "missed_associations": self._missed_associations,
         }
 
     # ------------------------------------------------------------------ pieces
@@ -464,6 +576,14 @@ class EKFSLAMEnv(gym.Env):
         """The true landmark positions (n, 2) in m, read-only (privileged: for baselines and evaluation)."""
         self._require_reset()
         return _read_only(self._true_landmarks)
+
+    @property
+    def slot_truth(self) -> np.ndarray:
+        """The true landmark each filter slot holds (n,) int, read-only: its index in ``true_landmarks``, -1 for
+        a free slot or one started by clutter; 0..n-1 in order with known association (privileged: for
+        evaluation, which scores each slot against the landmark it holds)."""
+        self._require_reset()
+        return _read_only(self._slot_truth)
 
     @property
     def bounds(self) -> np.ndarray:

@@ -10,7 +10,10 @@ block Sigma_mm, nats), ``pose_log_det`` (log det of the final marginal pose cova
 final estimates of the seen landmarks), ``missed_landmarks`` (never seen), ``seen_fraction``, ``ate`` (m, RMSE of
 estimated vs true positions over the steps, no alignment), ``anees`` (the pose NEES averaged over the steps),
 ``nees_in_bounds`` (fraction of steps whose pose NEES lies within the per-step 95 % chi-squared bounds, ideally
-0.95), ``loop_closures``, ``collisions`` (steps in contact with a wall) and ``path_length`` (m, true).
+0.95), ``loop_closures``, ``collisions`` (steps in contact with a wall) and ``path_length`` (m, true). With
+unknown data association (``filter.association`` not ``known``) also ``ASSOCIATION_KEYS``, the episode's
+``false_associations`` and ``missed_associations``, and the map metrics score each filter slot against the
+true landmark it holds (``env.slot_truth``): a landmark is missed when no slot holds it.
 
 ``export_tum`` writes an episode's true and estimated trajectories and its map for the evo tools
 (``data.tum``).
@@ -50,6 +53,9 @@ METRIC_KEYS: tuple[str, ...] = (
     "collisions",
     "path_length",
 )
+
+ASSOCIATION_KEYS: tuple[str, ...] = ("false_associations", "missed_associations")
+"""With unknown data association: the env's counts over the episode (``EKFSLAMEnv``'s docstring)."""
 
 SMOOTHER_KEYS: tuple[str, ...] = ("smoother_ate", "smoother_landmark_rmse")
 """With ``smoother``: the same episode smoothed by the graph back end (full SLAM), the filter's judge."""
@@ -135,16 +141,27 @@ def episode_metrics(
     u = env.unwrapped
     ekf = u.filter
     cov = np.asarray(ekf.cov)
-    rmse, missed = metrics.landmark_errors(
-        np.asarray(ekf.landmarks), u.true_landmarks, np.asarray(ekf.observed)
-    )
-    return {
+    unknown = u.config.filter.association != "known"
+    if unknown:
+        truth = np.asarray(u.slot_truth)
+        held = np.asarray(ekf.observed) & (truth >= 0)
+        rmse, _ = metrics.landmark_errors(
+            np.asarray(ekf.landmarks), u.true_landmarks[np.maximum(truth, 0)], held
+        )
+        missed = ekf.n_landmarks - np.unique(truth[held]).size
+        seen_fraction = 1.0 - missed / ekf.n_landmarks if ekf.n_landmarks else math.nan
+    else:
+        rmse, missed = metrics.landmark_errors(
+            np.asarray(ekf.landmarks), u.true_landmarks, np.asarray(ekf.observed)
+        )
+        seen_fraction = float(np.mean(ekf.observed)) if ekf.n_landmarks else math.nan
+    result = {
         "return": float(total_return),
         "map_log_det": _slogdet(cov[3:, 3:]),
         "pose_log_det": _slogdet(cov[:3, :3]),
         "landmark_rmse": rmse,
         "missed_landmarks": float(missed),
-        "seen_fraction": float(np.mean(ekf.observed)) if ekf.n_landmarks else math.nan,
+        "seen_fraction": seen_fraction,
         "ate": metrics.ate(estimated_poses, true_poses),
         "anees": metrics.anees(step_nees),
         "nees_in_bounds": metrics.fraction_in_bounds(step_nees, NEES_STEP_BOUNDS),
@@ -152,6 +169,9 @@ def episode_metrics(
         "collisions": float(last_info["collisions"]),
         "path_length": float(last_info["path_length"]),
     }
+    if unknown:
+        result.update({key: float(last_info[key]) for key in ASSOCIATION_KEYS})
+    return result
 
 
 def run_episode(

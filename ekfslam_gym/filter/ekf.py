@@ -16,7 +16,8 @@ import numpy as np
 
 from .. import compiled
 from ..angles import wrap_angle
-from . import codes
+from . import association, codes
+from .association import UnknownCorrection
 
 COURSE_MOTION_NOISE = np.diag([0.1, 0.1, 0.01])
 COURSE_MEASUREMENT_NOISE = 0.01 * np.eye(2)
@@ -193,6 +194,9 @@ class EKFSLAM:
         # First estimates: the pose as the last prediction left it, each landmark as it was initialised.
         self._prior_pose = self._mean[:3].copy()
         self._first = np.zeros((self.n_landmarks, 2))
+        # correct_unknown's tentative landmarks: corrections left to be matched again before being forgotten.
+        self._tentative = np.zeros(self.n_landmarks, dtype=np.int64)
+        self._association_cache: dict = {}
         # The Jacobians last used (see ``Jacobians``), written by the kernels.
         self._G_used = np.eye(3)
         self._H_used = np.zeros((max(16, self.n_landmarks), 2, 5))
@@ -410,6 +414,134 @@ class EKFSLAM:
             self._raise_correction_status(status, ids)
         self._after_call(change)
         return delta + change
+
+    # ------------------------------------------------------------------ unknown correspondences
+    def associate(
+        self, readings, method: association.Method = "jcbc", gate: float = association.DEFAULT_GATE, *,
+        measurement_cov=None,
+    ) -> np.ndarray:  # fmt: skip
+        """The initialised landmark slot each reading (m, 2) comes from, -1 for none (new, clutter or ambiguous).
+
+        ``method``: ``"nearest"`` (each reading alone takes its most likely landmark inside the gate) or
+        ``"jcbc"`` (joint compatibility branch and bound, Neira & Tardos 2001: the most pairings whose stacked
+        innovation passes the joint test). ``gate``: the probability of the chi-squared gates (2k degrees of
+        freedom for k pairings). Changes nothing.
+        """
+        code, gates, _ = self._association_settings(method, gate, association.DEFAULT_NEW_GATE)
+        readings = self._readings(readings)
+        if not np.all(np.isfinite(readings)):
+            raise ValueError("readings must be finite")
+        m = readings.shape[0]
+        slots = np.empty(m, dtype=np.int64)
+        compiled.associate(
+            self._mean, self._cov, self._observed, readings, self._noise(measurement_cov), self.min_range, code,
+            gates, association.MAX_NODES, slots, np.empty(m),
+        )  # fmt: skip
+        return slots
+
+    def correct_unknown(
+        self, readings, method: association.Method = "jcbc", gate: float = association.DEFAULT_GATE,
+        new_gate: float = association.DEFAULT_NEW_GATE, *, confirm_within: int = 0, measurement_cov=None,
+    ) -> UnknownCorrection:  # fmt: skip
+        """Associate the readings (m, 2) as ``associate`` does, then correct with the matched ones as ``correct``
+        does, initialising new landmarks: a reading that matches nothing and lies outside the ``new_gate``
+        chi-squared gate (2 dof) of every initialised landmark starts one in the first free slot (none left:
+        discarded); readings between the two gates are discarded, being neither clearly known nor clearly new.
+
+        ``confirm_within`` > 0 makes a new landmark tentative: unless one of the next ``confirm_within`` calls
+        matches a reading to it, it is forgotten (``forget``), so clutter does not fill the fixed-size state
+        (a simple form of the provisional landmark list of Thrun, Burgard & Fox, sec. 10.3.3). Returns an
+        ``UnknownCorrection`` (slots used, which were new, slots forgotten, change of log det Sigma).
+        """
+        code, gates, new_threshold = self._association_settings(method, gate, new_gate)
+        if (
+            isinstance(confirm_within, bool)
+            or not isinstance(confirm_within, (int, np.integer))
+            or confirm_within < 0
+        ):
+            raise ValueError(f"confirm_within must be an integer >= 0, got {confirm_within!r}")
+        readings = self._readings(readings)
+        m = readings.shape[0]
+        if m > self._H_slots.shape[0]:
+            self._H_used = np.zeros((2 * m, 2, 5))
+            self._H_slots = np.zeros(2 * m, dtype=np.int64)
+        slots = np.empty(m, dtype=np.int64)
+        new = np.empty(m, dtype=bool)
+        forget = np.empty(self.n_landmarks, dtype=np.int64)
+        delta, status, used, n_forget = compiled.correct_unknown(
+            self._mean, self._cov, self._P, self._observed, readings, self._noise(measurement_cov),
+            self.min_range, self.init_mode == "course", self.update_mode == "sequential", self._tracking,
+            self._variant_code, self.iterations, self._prior_pose, self._first, self._H_used, self._H_slots,
+            code, gates, new_threshold, association.MAX_NODES, int(confirm_within), self._tentative, slots, new,
+            forget,
+        )  # fmt: skip
+        self._n_used = used
+        if status == codes.BAD_INPUT:
+            raise ValueError("readings must be finite")
+        if status == codes.NOT_PD:
+            raise FilterDivergedError("innovation covariance is not positive definite")
+        self._after_call(delta)
+        forgotten = forget[:n_forget]
+        if n_forget:
+            delta += self._forget(forgotten)
+        return UnknownCorrection(slots, new, forgotten, delta)
+
+    def forget(self, index: int) -> float:
+        """Return landmark slot ``index`` to the unseen prior (mean 0, variance ``landmark_prior``, no
+        correlations), free for a new landmark; returns the change of log det Sigma.
+
+        Marginalising a landmark out of a Gaussian drops its rows and columns; putting the independent prior
+        back keeps the state's size. log det Sigma and P are then recomputed exactly (``resync``, O(N^3)): it
+        happens only when a tentative landmark is dropped.
+        """
+        if (
+            isinstance(index, bool)
+            or not isinstance(index, (int, np.integer))
+            or not 0 <= index < self.n_landmarks
+        ):
+            raise IndexError(f"landmark index {index!r} outside [0, {self.n_landmarks})")
+        return self._forget(np.array([index]))
+
+    def _forget(self, slots: np.ndarray) -> float:
+        for index in slots:
+            j = 3 + 2 * int(index)
+            self._cov[j : j + 2, :] = 0.0
+            self._cov[:, j : j + 2] = 0.0
+            self._cov[j, j] = self._cov[j + 1, j + 1] = self.landmark_prior
+            self._mean[j : j + 2] = 0.0
+        self._first[slots] = 0.0
+        self._observed[slots] = False
+        self._tentative[slots] = 0
+        if not self._tracking:
+            return 0.0
+        before = self._log_det
+        self.resync()
+        return self._log_det - before
+
+    def _association_settings(self, method, gate, new_gate) -> tuple[int, np.ndarray, float]:
+        """(method code, joint gates chi2(2k, gate) for k = 1..n, new-landmark threshold chi2(2, new_gate)),
+        validated and computed once per setting."""
+        key = (method, gate, new_gate)
+        settings = self._association_cache.get(key)
+        if settings is None:
+            code = association.check_method(method)
+            association.check_probability(gate, "gate")
+            association.check_probability(new_gate, "new_gate")
+            if new_gate < gate:
+                raise ValueError(f"new_gate must be >= gate, got {new_gate!r} < {gate!r}")
+            gates = association.gate_table(gate, self.n_landmarks)
+            settings = (code, gates, association.chi2_even_ppf(new_gate, 2))
+            self._association_cache[key] = settings
+        return settings
+
+    @staticmethod
+    def _readings(readings) -> np.ndarray:
+        return np.ascontiguousarray(np.asarray(readings, dtype=float).reshape(-1, 2))
+
+    def _noise(self, measurement_cov) -> np.ndarray:
+        if measurement_cov is None:
+            return self.measurement_noise
+        return _as_covariance(measurement_cov, 2, "measurement_cov")
 
     def _after_call(self, delta: float) -> None:
         if self._tracking:

@@ -3,7 +3,10 @@
 Landmarks are points with known correspondences; a reading is (range m, bearing rad) in the robot frame, with
 independent Gaussian noise of constant standard deviation (so its covariance Q is a constant diag), bearing
 wrapped to (-pi, pi]. A landmark is read when its range is in [min_range, max_range], its bearing within half the
-field of view, and the line of sight from the robot's centre misses every wall capsule. The scan gives the
+field of view, and the line of sight from the robot's centre misses every wall capsule; optionally only with
+probability ``detection_prob``, and with false readings (clutter, id -1) added: a Poisson number with mean
+``clutter_rate``, uniform in range and bearing over the field of view (the usual clutter model: a constant
+density in reading space). The scan gives the
 distance from the robot's centre to the nearest wall surface along a few beams, noise-free and clipped, because
 the belief holds no walls and a policy must still avoid them.
 """
@@ -25,7 +28,8 @@ class SensorParams:
 
     min_range, max_range: m. fov: full field of view, rad (2 pi for all round), centred on the heading.
     range_std: m; bearing_std: rad. n_beams: wall-scan beams, evenly spaced over 360 degrees starting at the
-    heading. scan_max_range: m, where the scan clips.
+    heading. scan_max_range: m, where the scan clips. detection_prob: probability that a visible landmark is
+    read. clutter_rate: expected false readings per step. The defaults (1, 0) draw no extra random numbers.
     """
 
     min_range: float = 0.2
@@ -35,6 +39,8 @@ class SensorParams:
     bearing_std: float = math.radians(1.0)
     n_beams: int = 16
     scan_max_range: float = 5.0
+    detection_prob: float = 1.0
+    clutter_rate: float = 0.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.min_range) and self.min_range >= 0.0):
@@ -54,6 +60,15 @@ class SensorParams:
                 f"SensorParams.scan_max_range must be finite and > 0, got {self.scan_max_range!r}"
             )
 
+        if not (isinstance(self.detection_prob, (int, float)) and 0.0 < self.detection_prob <= 1.0):
+            raise ValueError(f"SensorParams.detection_prob must be in (0, 1], got {self.detection_prob!r}")
+        if not (
+            isinstance(self.clutter_rate, (int, float))
+            and math.isfinite(self.clutter_rate)
+            and self.clutter_rate >= 0.0
+        ):
+            raise ValueError(f"SensorParams.clutter_rate must be finite and >= 0, got {self.clutter_rate!r}")
+
     @property
     def cov(self) -> np.ndarray:
         """Covariance Q (2, 2) of one reading's noise: diag(range_std^2, bearing_std^2)."""
@@ -61,9 +76,9 @@ class SensorParams:
 
 
 class Readings(NamedTuple):
-    """Landmark readings of one step, ordered by id.
+    """Landmark readings of one step, ordered by id, clutter (id -1) last.
 
-    ids: (m,) int64, 0-based landmark indices; z: (m, 2) float64, (range m, bearing rad in (-pi, pi]).
+    ids: (m,) int64, 0-based landmark indices, -1 for a false reading; z: (m, 2) float64, (range m, bearing rad in (-pi, pi]).
     """
 
     ids: np.ndarray
@@ -97,12 +112,24 @@ class RangeBearingSensor:
         return Readings(self._ids[:m].copy(), self._z[:m].copy())
 
     def sense(self, pose: tuple[float, float, float], rng: np.random.Generator) -> Readings:
-        """Noisy readings from pose (x m, y m, theta rad); noise drawn from ``rng``, (m, 2) normals in id order."""
+        """Noisy readings from pose (x m, y m, theta rad), drawn from ``rng``: with ``detection_prob`` < 1 first
+        one uniform per visible landmark (kept if below it), then (m, 2) normals in id order, then with
+        ``clutter_rate`` > 0 a Poisson count and its ranges and bearings."""
         ids, z = self.true_readings(pose)
+        p = self.params
+        if p.detection_prob < 1.0 and z.shape[0]:
+            keep = rng.random(z.shape[0]) < p.detection_prob
+            ids, z = ids[keep], z[keep]
         if z.shape[0]:
-            compiled.add_reading_noise(
-                z, rng.standard_normal(z.shape), self.params.range_std, self.params.bearing_std
-            )
+            compiled.add_reading_noise(z, rng.standard_normal(z.shape), p.range_std, p.bearing_std)
+        if p.clutter_rate > 0.0:
+            count = int(rng.poisson(p.clutter_rate))
+            if count:
+                clutter = np.empty((count, 2))
+                clutter[:, 0] = rng.uniform(p.min_range, p.max_range, count)
+                clutter[:, 1] = rng.uniform(-self._half_fov, self._half_fov, count)
+                ids = np.concatenate([ids, np.full(count, -1, dtype=np.int64)])
+                z = np.concatenate([z, clutter])
         return Readings(ids, z)
 
     def scan(self, pose: tuple[float, float, float]) -> np.ndarray:
