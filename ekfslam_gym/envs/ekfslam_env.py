@@ -315,8 +315,6 @@ class EKFSLAMEnv(gym.Env):
         """One control step of ``dt`` with the normalised command (a0, a1) already clipped: physics, odometry,
         readings, filter, reward terms and metrics. Returns (terms, reward, terminated, nees, rmse, seen,
         failed); the caller builds the observation and info once per env step."""
-        if self._unknown:
-            return self._unknown_control_step(a0, a1)
         ekf = self._ekf
         world, rng = self._world, self.np_random
         x0, y0, _ = world.pose_tuple
@@ -331,8 +329,13 @@ class EKFSLAMEnv(gym.Env):
         self._action = (a0, a1)
         self._collided = collided
 
+        unknown = self._unknown
         try:
-            ekf.update(odometry.u, odometry.cov, readings.ids, readings.z)
+            if unknown:
+                ekf.predict(odometry.u, control_cov=odometry.cov)
+                read = self._correct_unknown(readings)
+            else:
+                ekf.update(odometry.u, odometry.cov, readings.ids, readings.z)
             failed = not math.isfinite(ekf.log_det)
         except FilterDivergedError:
             failed = True
@@ -344,44 +347,13 @@ class EKFSLAMEnv(gym.Env):
         self._newly_covered = self._mark_and_trail()
         terms = self._rewards()
         reward = sum(terms.values(), 0.0)
-        nees, rmse, closures, self._worst_variance, seen = compiled.step_metrics(
-            mean, cov, observed, world.pose_tuple, self._true_landmarks, readings.ids, self._last_seen, self._t,
-            self.config.loop_gap,
-        )  # fmt: skip
-        self._loop_closures += closures
-        return terms, reward, self._is_terminated(), nees, rmse, seen, False
-
-    def _unknown_control_step(self, a0: float, a1: float):
-        """``_control_step`` with the readings associated by the filter (``_correct_unknown``) and the metrics
-        taken through the slot -> true landmark map (``_unknown_metrics``)."""
-        ekf = self._ekf
-        world, rng = self._world, self.np_random
-        x0, y0, _ = world.pose_tuple
-        collided = world.step(a0 * self._v_max, a1 * self._omega_max)
-        x1, y1, _ = world.pose_tuple
-        self._path_length += math.hypot(x1 - x0, y1 - y0)
-        self._collisions += collided
-        odometry = self._read_odometry(rng)
-        readings = world.sense(rng)
-        self._odometry, self._odometry_cov = odometry.u, odometry.cov
-        self._t += 1
-        self._action = (a0, a1)
-        self._collided = collided
-
-        try:
-            ekf.predict(odometry.u, control_cov=odometry.cov)
-            read = self._correct_unknown(readings)
-            failed = not math.isfinite(ekf.log_det)
-        except FilterDivergedError:
-            failed = True
-        if failed:
-            return None, 0.0, True, math.nan, math.nan, 0, True
-
-        self._prev_log_det, self._log_det = self._log_det, ekf.log_det
-        self._newly_covered = self._mark_and_trail()
-        terms = self._rewards()
-        reward = sum(terms.values(), 0.0)
-        nees, rmse, closures, self._worst_variance, seen = self._unknown_metrics(read)
+        if unknown:
+            nees, rmse, closures, self._worst_variance, seen = self._unknown_metrics(read)
+        else:
+            nees, rmse, closures, self._worst_variance, seen = compiled.step_metrics(
+                mean, cov, observed, world.pose_tuple, self._true_landmarks, readings.ids, self._last_seen,
+                self._t, self.config.loop_gap,
+            )  # fmt: skip
         self._loop_closures += closures
         return terms, reward, self._is_terminated(), nees, rmse, seen, False
 
