@@ -129,3 +129,21 @@ def test_layout_validates_shapes() -> None:
         Layout("x", np.zeros((0, 4)), np.zeros((0, 2)), np.zeros(2), np.zeros(4), 0.05)
     with pytest.raises(ValueError, match="finite"):
         Layout("x", np.zeros((0, 4)), np.full((1, 2), np.nan), np.zeros(3), np.zeros(4), 0.05)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_the_free_space_cache_changes_no_layout(name):
+    from ekfslam_gym.sim import layouts
+
+    def generate(seed, clear):
+        if clear:
+            layouts._grid_cache.clear()
+        return make_layout(name, np.random.default_rng(seed), 12)
+
+    warm = [generate(seed, clear=False) for seed in range(6)]
+    cold = [generate(seed, clear=True) for seed in range(6)]
+    for a, b in zip(warm, cold):
+        np.testing.assert_array_equal(a.landmarks, b.landmarks)
+        np.testing.assert_array_equal(a.walls, b.walls)
+        np.testing.assert_array_equal(a.start, b.start)
+    assert 0 < len(layouts._grid_cache) <= layouts._GRID_CACHE_SIZE
