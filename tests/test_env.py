@@ -12,6 +12,7 @@ from scipy import stats
 
 import ekfslam_gym  # noqa: F401  (registers the envs)
 from ekfslam_gym.envs import PRESETS, EKFSLAMEnv, EnvConfig
+from ekfslam_gym.envs.config import FilterConfig
 
 ENV_IDS = sorted(PRESETS)
 
@@ -633,7 +634,7 @@ def test_every_filter_variant_and_motion_model_runs_and_passes_the_checker(setti
     _, info = env.reset(seed=3)
     ekf = env.unwrapped.filter  # a new filter at every reset
     assert ekf.variant == settings.get("variant", "ekf")
-    assert ekf.motion_model == settings.get("motion_model", "odometry")
+    assert ekf.motion_model == settings.get("motion_model", FilterConfig().motion_model)
     assert ekf.iterations == settings.get("iterations", 5)
     width = 2 if ekf.motion_model == "velocity" else 3
     rng = np.random.default_rng(3)

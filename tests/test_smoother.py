@@ -125,3 +125,56 @@ def test_dead_reckoning_chains_odometry():
     np.testing.assert_allclose(poses[1], [1.0 + np.cos(np.pi + 0.1), 2.0 + np.sin(np.pi + 0.1), -np.pi + 0.1])
     np.testing.assert_allclose(poses[2, :2], poses[1, :2])
     assert poses[2, 2] == pytest.approx(-np.pi + 0.3)
+
+
+WHEEL_BASE = 0.3
+
+
+@pytest.mark.parametrize("u", [[0.10, 0.12, 0.0], [0.05, 0.05, 0.01], [-0.03, 0.03, 0.0], [0.2, -0.1, -0.02]])
+def test_wheels_relative_pose_is_the_filters_wheel_motion(u):
+    from ekfslam_gym.filter.models import wheel_motion
+
+    pose = np.array([1.0, -2.0, 2.9])
+    moved, _, V = wheel_motion(pose, *u, WHEEL_BASE)
+    np.testing.assert_allclose(se2.compose(pose, se2.wheels_to_relative(u, WHEEL_BASE)), moved, atol=1e-12)
+    # From the origin the pose Jacobian V of the filter's model is the relative pose's Jacobian.
+    np.testing.assert_allclose(se2.wheels_jacobian(u, WHEEL_BASE), wheel_motion(np.zeros(3), *u, WHEEL_BASE)[2],
+                               atol=1e-12)  # fmt: skip
+    assert V.shape == (3, 3)
+
+
+@pytest.mark.parametrize(
+    "u", [[0.10, 0.12, 0.0], [0.04, 0.04, 0.0], [0.04, 0.04 + 1e-6, 0.003], [0.3, -0.2, 0.01]]
+)
+def test_wheels_jacobian_matches_finite_differences(u):
+    u = np.asarray(u, dtype=float)
+    J = se2.wheels_jacobian(u, WHEEL_BASE)
+    h = 1e-7
+    for k in range(3):
+        step = np.zeros(3)
+        step[k] = h
+        numeric = (
+            se2.wheels_to_relative(u + step, WHEEL_BASE) - se2.wheels_to_relative(u - step, WHEEL_BASE)
+        ) / (2 * h)
+        np.testing.assert_allclose(J[:, k], numeric, atol=1e-7)
+
+
+def test_wheels_edge_covariance_matches_sampling():
+    rng = np.random.default_rng(7)
+    u = np.array([0.08, 0.12, 0.0])
+    M = np.diag([0.004, 0.005, 0.002]) ** 2
+    samples = rng.multivariate_normal(u, M, size=200_000)
+    z = se2.wheels_to_relative(u, WHEEL_BASE)
+    errors = se2.between(se2.wheels_to_relative(samples, WHEEL_BASE), np.broadcast_to(z, samples.shape))
+    cov = odometry_edge_covariance(u, M, "wheels", WHEEL_BASE)[0]
+    scale = 1.0 / np.sqrt(np.diag(cov))
+    np.testing.assert_allclose(
+        scale[:, None] * np.cov(errors.T) * scale, scale[:, None] * cov * scale, atol=0.02
+    )
+
+
+def test_the_wheels_model_needs_its_wheel_base():
+    with pytest.raises(ValueError, match="wheel_base"):
+        dead_reckoning([0, 0, 0], [[0.1, 0.1, 0.0]], "wheels")
+    with pytest.raises(ValueError, match="motion_model"):
+        dead_reckoning([0, 0, 0], [[0.1, 0.1, 0.0]], "velocity")

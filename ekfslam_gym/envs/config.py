@@ -73,16 +73,18 @@ class WorldConfig:
 class FilterConfig:
     """The EKF-SLAM inside the env.
 
-    motion_model: ``odometry`` (turn-drive-turn, exact for any planar step, the default), ``velocity``
-    (v, omega) or ``wheels`` (wheel-encoder travels with a sideways slip, which reads a slide along a wall as a
-    slip rather than as large turns; the simulator's default ``WheelOdometryNoise``). variant: where the
+    motion_model: ``wheels`` (the default: wheel-encoder travels with a sideways slip, which reads a slide
+    along a wall as a slip rather than as large turns; the simulator's default ``WheelOdometryNoise``),
+    ``odometry`` (turn-drive-turn with Thrun's alpha noise, the course's model; the default until the wheels
+    model was shown consistent under every kind of driving, see the README's *Filter consistency*) or
+    ``velocity`` (v, omega). variant: where the
     filter linearises: ``ekf`` (the default), ``fej`` (first-estimates Jacobians, Huang, Mourikis &
     Roumeliotis 2010: no spurious information about the unobservable global pose) or ``iekf`` (the correction
     iterated by Gauss-Newton, at most ``iterations`` linearisations); all keep the exact running log det.
     init_mode: ``inverse`` (the standard for a simulated robot) or ``course``. landmark_prior: variance (m^2) at
     which every unseen landmark is carried, so log det Sigma is finite and discovering a landmark pays a
     bounded amount. pose_prior: initial pose variance (m^2 and rad^2; small and positive, so Sigma_0 is
-    definite). resync_every: filter calls between exact Cholesky re-synchronisations of the running log det.
+    definite; the filter starts at the true pose). resync_every: filter calls between exact Cholesky re-synchronisations of the running log det.
     association: how readings find their landmarks: ``known`` (the sensor's ids, the default; clutter is
     dropped, as an oracle would), ``nearest`` (each reading alone takes its most likely landmark inside the
     gate) or ``jcbc`` (joint compatibility branch and bound, Neira & Tardos 2001), the latter two from the
@@ -93,13 +95,13 @@ class FilterConfig:
     the map; 0: never).
     """
 
-    motion_model: str = "odometry"
+    motion_model: str = "wheels"
     variant: str = "ekf"
     iterations: int = 5
     init_mode: str = "inverse"
     update: str = "batch"
     landmark_prior: float = 100.0
-    pose_prior: float = 1e-6
+    pose_prior: float = 1e-10
     resync_every: int = 1000
     association: str = "known"
     gate_prob: float = 0.99

@@ -25,11 +25,16 @@ def compare_with_smoother(recorder: EpisodeRecorder, env, method: str = "gn") ->
     ran in, still at its last step."""
     env = env.unwrapped
     config = env.config
+    if config.filter.motion_model not in ("odometry", "wheels"):
+        raise ValueError(
+            f"the smoother reads odometry or wheels odometry, not {config.filter.motion_model!r}"
+        )
     true_poses = np.array(recorder.true_poses)
     smoothed = smooth_drive(
         true_poses[0], np.array(recorder.odometry), np.array(recorder.odometry_cov), recorder.readings,
         config.sensor.cov, initial_pose_cov=config.filter.pose_prior * np.eye(3),
-        num_landmarks=env.filter.n_landmarks, method=method,
+        num_landmarks=env.filter.n_landmarks, method=method, motion_model=config.filter.motion_model,
+        wheel_base=env.filter.wheel_base,
     )  # fmt: skip
     truth = env.true_landmarks
     filter_rmse, _ = landmark_errors(np.asarray(env.filter.landmarks), truth, np.asarray(env.filter.observed))

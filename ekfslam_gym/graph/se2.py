@@ -18,6 +18,8 @@ __all__ = [
     "odometry_to_relative",
     "t2v",
     "v2t",
+    "wheels_jacobian",
+    "wheels_to_relative",
 ]
 
 
@@ -89,3 +91,49 @@ def odometry_jacobian(odometry: ArrayLike) -> NDArray[np.float64]:
     V[..., 1, 0], V[..., 1, 1] = t * c, s
     V[..., 2, 0], V[..., 2, 2] = 1.0, 1.0
     return V
+
+
+def _sinc_and_derivative(u: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """sin(u)/u and its derivative, elementwise and smooth through u = 0 (series below 1e-4)."""
+    small = np.abs(u) < 1e-4
+    safe = np.where(small, 1.0, u)
+    u2 = u * u
+    sinc = np.where(small, 1.0 - u2 / 6.0 + u2 * u2 / 120.0, np.sin(safe) / safe)
+    derivative = np.where(
+        small, -u / 3.0 + u * u2 / 30.0, (safe * np.cos(safe) - np.sin(safe)) / (safe * safe)
+    )
+    return sinc, derivative
+
+
+def wheels_to_relative(odometry: ArrayLike, wheel_base: float) -> NDArray[np.float64]:
+    """Relative pose (in the frame of the pose before the step) of wheel odometry (left, right, slip) [m]: the
+    wheels' arc, turn a = (right - left) / b and chord (left + right) / 2 sinc(a / 2) along the mid-heading a / 2,
+    plus the sideways slip along its normal (the filter's wheels model, Thrun, Burgard & Fox, section 5.3)."""
+    u = np.asarray(odometry, dtype=float)
+    left, right, slip = u[..., 0], u[..., 1], u[..., 2]
+    half = 0.5 * (right - left) / wheel_base
+    sinc, _ = _sinc_and_derivative(half)
+    chord = 0.5 * (left + right) * sinc
+    c, s = np.cos(half), np.sin(half)
+    return np.stack([chord * c - slip * s, chord * s + slip * c, wrap_angles(2.0 * half)], axis=-1)
+
+
+def wheels_jacobian(odometry: ArrayLike, wheel_base: float) -> NDArray[np.float64]:
+    """∂(relative pose)/∂(left, right, slip) of ``wheels_to_relative``, shape (..., 3, 3)."""
+    u = np.asarray(odometry, dtype=float)
+    left, right, slip = u[..., 0], u[..., 1], u[..., 2]
+    half = 0.5 * (right - left) / wheel_base
+    sinc, dsinc = _sinc_and_derivative(half)
+    d = 0.5 * (left + right)
+    chord = d * sinc
+    c, s = np.cos(half), np.sin(half)
+    dhalf = np.array([-0.5, 0.5]) / wheel_base  # ∂half/∂(left, right)
+    J = np.zeros(u.shape[:-1] + (3, 3))
+    for k in range(2):  # left, right
+        dchord = 0.5 * sinc + d * dsinc * dhalf[k]
+        J[..., 0, k] = dchord * c - (chord * s + slip * c) * dhalf[k]
+        J[..., 1, k] = dchord * s + (chord * c - slip * s) * dhalf[k]
+        J[..., 2, k] = 2.0 * dhalf[k]
+    J[..., 0, 2] = -s
+    J[..., 1, 2] = c
+    return J

@@ -3,6 +3,10 @@
 Run once, before a refactor, with ``python tests/golden/record.py``: it writes ``rollouts.npz`` beside this
 file (observations and rewards of a 500-step rollout of every registered id, seed 123, actions from a seeded
 generator independent of the observations). A later change that alters behaviour fails the test.
+
+Two settings are held: ``previous`` (the filter settings the first recording was made with, before the package
+was reorganised: turn-drive-turn odometry, pose prior 1e-6; keys ``<env id>/...``) and ``default`` (the
+defaults since the wheels model became the default; keys ``default/<env id>/...``).
 """
 
 from __future__ import annotations
@@ -18,6 +22,11 @@ ENV_IDS = ("EKFSLAM-v0", "EKFSLAM-Loop-v0", "EKFSLAM-Large-v0")
 STEPS = 500
 SEED = 123
 HERE = Path(__file__).resolve().parent
+SETTINGS = {
+    "previous": {"filter": {"motion_model": "odometry", "pose_prior": 1e-6}},
+    "default": {},
+}
+PREFIX = {"previous": "", "default": "default/"}
 
 
 def actions(steps: int = STEPS, seed: int = 0) -> np.ndarray:
@@ -32,8 +41,8 @@ def actions(steps: int = STEPS, seed: int = 0) -> np.ndarray:
     return out
 
 
-def rollout(env_id: str) -> dict[str, np.ndarray]:
-    env = gym.make(env_id)
+def rollout(env_id: str, setting: str = "default") -> dict[str, np.ndarray]:
+    env = gym.make(env_id, **SETTINGS[setting])
     obs, info = env.reset(seed=SEED)
     observations, rewards, flags, log_dets = [obs], [], [], [info["log_det"]]
     for action in actions():
@@ -55,14 +64,19 @@ def rollout(env_id: str) -> dict[str, np.ndarray]:
     }
 
 
-def main() -> None:
-    arrays = {}
-    for env_id in ENV_IDS:
-        for key, value in rollout(env_id).items():
-            arrays[f"{env_id}/{key}"] = value
-    np.savez_compressed(HERE / "rollouts.npz", **arrays)
+def main(settings: tuple[str, ...] = tuple(SETTINGS)) -> None:
+    """Record ``settings`` (all by default), keeping what the file holds for the others."""
+    path = HERE / "rollouts.npz"
+    arrays = dict(np.load(path)) if path.exists() else {}
+    for setting in settings:
+        for env_id in ENV_IDS:
+            for key, value in rollout(env_id, setting).items():
+                arrays[f"{PREFIX[setting]}{env_id}/{key}"] = value
+    np.savez_compressed(path, **arrays)
     print(f"wrote {HERE / 'rollouts.npz'}")
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(tuple(sys.argv[1:]) or tuple(SETTINGS))

@@ -18,12 +18,14 @@ ENV_IDS = ("EKFSLAM-v0", "EKFSLAM-Loop-v0")
 STEPS = 120
 SEED = 7
 HERE = Path(__file__).resolve().parent
+# The filter settings the recording was made with (the defaults then); the agents plan on the filter's belief.
+PREVIOUS_FILTER = {"filter": {"motion_model": "odometry", "pose_prior": 1e-6}}
 
 
 def actions(agent_name: str, env_id: str) -> np.ndarray:
     from agents import make_agent
 
-    env = gym.make(env_id)
+    env = gym.make(env_id, **PREVIOUS_FILTER)
     agent = make_agent(agent_name)
     obs, _ = env.reset(seed=SEED)
     agent.reset(env, seed=SEED)
