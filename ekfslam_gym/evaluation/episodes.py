@@ -10,7 +10,13 @@ block Sigma_mm, nats), ``pose_log_det`` (log det of the final marginal pose cova
 final estimates of the seen landmarks), ``missed_landmarks`` (never seen), ``seen_fraction``, ``ate`` (m, RMSE of
 estimated vs true positions over the steps, no alignment), ``anees`` (the pose NEES averaged over the steps),
 ``nees_in_bounds`` (fraction of steps whose pose NEES lies within the per-step 95 % chi-squared bounds, ideally
-0.95), ``loop_closures``, ``collisions`` (steps in contact with a wall) and ``path_length`` (m, true). With
+0.95), ``loop_closures``, ``collisions`` (steps in contact with a wall), ``path_length`` (m, true), and belief
+beside truth: ``gain_pearson`` and ``gain_spearman``, the correlation over the episode's env steps of the
+information gain the filter believes in (the drop of ``info["log_det"]``, nats, unweighted) and the truth gain
+(``info["truth_gain"]``, the drop of the seen landmarks' squared error, m^2; the env's docstring defines it),
+one value per episode, aggregated over episodes like every metric (IQM and CI; not a pooled correlation). A
+policy paid for information that makes the map no better, e.g. by driving the filter into over-confidence,
+shows a low one. With
 unknown data association (``filter.association`` not ``known``) also ``ASSOCIATION_KEYS``, the episode's
 ``false_associations`` and ``missed_associations``, and the map metrics score each filter slot against the
 true landmark it holds (``env.slot_truth``): a landmark is missed when no slot holds it.
@@ -52,6 +58,8 @@ METRIC_KEYS: tuple[str, ...] = (
     "loop_closures",
     "collisions",
     "path_length",
+    "gain_pearson",
+    "gain_spearman",
 )
 
 ASSOCIATION_KEYS: tuple[str, ...] = ("false_associations", "missed_associations")
@@ -135,9 +143,11 @@ def episode_metrics(
     estimated_poses: np.ndarray,
     step_nees: np.ndarray,
     last_info: Mapping[str, Any],
+    belief_gains: np.ndarray,
+    truth_gains: np.ndarray,
 ) -> dict[str, float]:
     """The ``METRIC_KEYS`` of a finished episode from its recorded trajectory, the pose NEES the env reported at
-    each step (``info["pose_nees"]``) and the env's final belief."""
+    each step (``info["pose_nees"]``), the per-step information and truth gains, and the env's final belief."""
     u = env.unwrapped
     ekf = u.filter
     cov = np.asarray(ekf.cov)
@@ -169,6 +179,7 @@ def episode_metrics(
         "collisions": float(last_info["collisions"]),
         "path_length": float(last_info["path_length"]),
     }
+    result["gain_pearson"], result["gain_spearman"] = metrics.gain_correlation(belief_gains, truth_gains)
     if unknown:
         result.update({key: float(last_info[key]) for key in ASSOCIATION_KEYS})
     return result
@@ -197,6 +208,8 @@ def run_episode(
     if frames is not None:
         frames.append(env.render())
     true_poses, estimated_poses, step_nees = [], [], []
+    belief_gains, truth_gains = [], []
+    log_det = info["log_det"]
     total, steps = 0.0, 0
     while True:
         observation, reward, terminated, truncated, info = env.step(agent.act(observation))
@@ -205,6 +218,9 @@ def run_episode(
         true_poses.append(info["true_pose"])
         estimated_poses.append(info["pose"])
         step_nees.append(info["pose_nees"])
+        belief_gains.append(log_det - info["log_det"])
+        truth_gains.append(info["truth_gain"])
+        log_det = info["log_det"]
         if recording is not None:
             recording.add(info)
         if frames is not None:
@@ -214,7 +230,10 @@ def run_episode(
     true, estimated = np.array(true_poses, dtype=float), np.array(estimated_poses, dtype=float)
     if trajectories is not None:
         trajectories(true, estimated)
-    result = episode_metrics(env, total, true, estimated, np.array(step_nees, dtype=float), info)
+    result = episode_metrics(
+        env, total, true, estimated, np.array(step_nees, dtype=float), info, np.array(belief_gains, dtype=float),
+        np.array(truth_gains, dtype=float),
+    )  # fmt: skip
     return {"seed": int(seed), "steps": steps, **result}
 
 

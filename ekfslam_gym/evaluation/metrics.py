@@ -8,6 +8,8 @@ check each on a case with a known answer.
 - ``landmark_errors``: RMSE of the seen landmarks and the number of landmarks never seen.
 - ``nees`` / ``nees_bounds``: normalised estimation error squared of a Gaussian estimate and its two-sided
   chi-squared bounds; ``anees`` averages NEES and ``fraction_in_bounds`` counts the steps inside the bounds.
+- ``gain_correlation``: Pearson and Spearman correlation of two per-step series (the information gain the
+  filter believes in and the truth gain, the drop of the seen landmarks' squared error).
 - ``iqm`` / ``bootstrap_ci``: the interquartile mean (robust to a few failed episodes, as in rliable) and a
   seeded percentile-bootstrap confidence interval of it.
 """
@@ -27,6 +29,7 @@ __all__ = [
     "anees",
     "bootstrap_ci",
     "fraction_in_bounds",
+    "gain_correlation",
     "iqm",
     "landmark_errors",
     "nees",
@@ -133,6 +136,33 @@ def fraction_in_bounds(values: np.ndarray, bounds: tuple[float, float]) -> float
         return math.nan
     inside = (values >= bounds[0]) & (values <= bounds[1])
     return float(inside.mean())
+
+
+def gain_correlation(belief: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
+    """(Pearson r, Spearman rho) of two equally long per-step series, over the steps where both are finite.
+
+    NaN where undefined: fewer than 3 such steps, or either series constant on them (no variation to
+    correlate). Spearman is Pearson on the ranks (ties averaged), so it is not ruled by the few large
+    information gains of discovery steps.
+    """
+    belief = np.asarray(belief, dtype=float).reshape(-1)
+    truth = np.asarray(truth, dtype=float).reshape(-1)
+    if belief.shape != truth.shape:
+        raise ValueError(f"the series must be equally long, got {belief.size} and {truth.size}")
+    keep = np.isfinite(belief) & np.isfinite(truth)
+    belief, truth = belief[keep], truth[keep]
+    if belief.size < 3 or np.ptp(belief) == 0.0 or np.ptp(truth) == 0.0:
+        return math.nan, math.nan
+    return _pearson(belief, truth), _pearson(stats.rankdata(belief), stats.rankdata(truth))
+
+
+def _pearson(x: np.ndarray, y: np.ndarray) -> float:
+    x = x - x.mean()
+    y = y - y.mean()
+    denominator = math.sqrt(float(x @ x) * float(y @ y))
+    if denominator == 0.0:
+        return math.nan
+    return float(np.clip((x @ y) / denominator, -1.0, 1.0))
 
 
 def _iqm_along_last_axis(values: np.ndarray) -> np.ndarray:

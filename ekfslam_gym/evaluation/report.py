@@ -33,6 +33,8 @@ BETTER: dict[str, str | None] = {
     "loop_closures": "higher",
     "collisions": "lower",
     "path_length": None,
+    "gain_pearson": "higher",
+    "gain_spearman": "higher",
     "false_associations": "lower",
     "missed_associations": "lower",
 }
