@@ -82,9 +82,14 @@ class EKFSLAMEnv(gym.Env):
     (with unknown association: the slots holding a true landmark, each against the landmark it holds). A
     landmark first seen in a step enters the sum from the next step on, so its initial error counts as no
     loss; the pose is not included. Over an episode with known association the truth gains sum to
-    sum_j (e_j at first sight - e_j at the end). A macro step sums it over its control steps. The evaluation
-    reports, per episode, the correlation of the two (``ekfslam_gym.evaluation.episodes``): a policy paid for
-    information that makes the map no better shows a low one.
+    sum_j (e_j at first sight - e_j at the end). ``info["belief_gain"]`` (m^2) is its counterpart in the
+    belief, over exactly the same landmarks (slots): the drop of the sum of their marginal position variances
+    tr Sigma_jj (the trace of each 2x2 block), which is what a consistent filter expects the squared error to
+    drop by (E e_j = tr Sigma_jj); with known association the belief gains sum over an episode to
+    sum_j (tr Sigma_jj at first sight - tr Sigma_jj at the end). Both are 0 at reset and on a failed step; a
+    macro step sums each over its control steps. The evaluation reports, per episode, the correlation of the
+    belief and truth gains and the final map NEES (``ekfslam_gym.evaluation.episodes``): a policy paid for
+    information that makes the map no better shows a low correlation, and an over-confident map a NEES above 1.
 
     ## Starting State
     The robot at the layout's start pose, known to the filter (pose prior ``filter.pose_prior``); ``reset``
