@@ -95,8 +95,8 @@ KERNELS: dict[str, tuple[str, str, str]] = {
     "step_metrics": (
         "ekfslam_gym.envs.kernels",
         "step_metrics",
-        f"Tuple((f8, f8, i8, f8, i8, f8))({_F8_1}, {_F8_2}, b1[::1], UniTuple(f8, 3), {_F8_2}, i8[::1], i8[::1], "
-        f"{_F8_1}, i8, i8)",
+        f"Tuple((f8, f8, i8, f8, i8, f8, f8))({_F8_1}, {_F8_2}, b1[::1], UniTuple(f8, 3), {_F8_2}, i8[::1], "
+        f"i8[::1], {_F8_1}, {_F8_1}, i8, i8)",
     ),
     "wheel_reading": (
         "ekfslam_gym.sim.odometry_kernels",

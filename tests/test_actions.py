@@ -41,8 +41,8 @@ def test_every_kind_passes_sb3s_checker(action):
 @pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}")
 def test_a_macro_step_is_its_control_steps_summed_exactly(action):
     """Replaying each macro step's inner actions one control step at a time gives the same filter state, and
-    the macro reward is exactly the sum of those steps' rewards; each term, and the truth gain, is the sum of its
-    inner ones."""
+    the macro reward is exactly the sum of those steps' rewards; each term, and the truth and belief gains, is the
+    sum of its inner ones."""
     macro = EKFSLAMEnv(action=action, max_episode_steps=40)
     single = EKFSLAMEnv(max_episode_steps=10_000)
     macro.reset(seed=7)
@@ -51,16 +51,18 @@ def test_a_macro_step_is_its_control_steps_summed_exactly(action):
         _, reward, terminated, truncated, info = macro.step(a)
         inner = info["inner_actions"]
         assert inner.shape == (info["inner_steps"], 2) and 1 <= len(inner) <= macro.config.action.steps
-        total, truth, terms = 0.0, 0.0, {}
+        total, truth, belief, terms = 0.0, 0.0, 0.0, {}
         for command in inner:
             _, r, *_, single_info = single.step(command.astype(np.float64))
             total += r
             truth += single_info["truth_gain"]
+            belief += single_info["belief_gain"]
             for name, value in single_info["reward_terms"].items():
                 terms[name] = terms.get(name, 0.0) + value
         assert reward == total
         assert info["reward_terms"] == terms
         assert info["truth_gain"] == truth
+        assert info["belief_gain"] == belief
         assert np.array_equal(macro.filter.mean, single.filter.mean)
         assert np.array_equal(macro.filter.cov, single.filter.cov)
         assert info["step"] == single_info["step"]

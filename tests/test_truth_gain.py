@@ -1,6 +1,7 @@
 """Belief beside truth: the env's ``info["truth_gain"]`` (the drop of the seen landmarks' squared error, from the
-compiled step metrics) against numpy, its sum over an episode, and the evaluation's correlation of it with the
-information gain on cases with known answers."""
+compiled step metrics) and ``info["belief_gain"]`` (the drop of their position variances) against numpy, their
+sums over an episode, and the evaluation's correlation of the two and final map NEES on cases with known
+answers."""
 
 from __future__ import annotations
 
@@ -30,58 +31,85 @@ def _errors(env: EKFSLAMEnv) -> np.ndarray:
     return np.where(held, errors, np.nan)
 
 
+def _traces(env: EKFSLAMEnv) -> np.ndarray:
+    """Each slot's tr Sigma_jj (its 2x2 marginal position covariance), over the same slots as ``_errors``."""
+    ekf = env.filter
+    held = np.asarray(ekf.observed) & (np.asarray(env.slot_truth) >= 0)
+    diagonal = np.diag(np.asarray(ekf.cov))[3:].reshape(-1, 2)
+    return np.where(held, diagonal.sum(axis=1), np.nan)
+
+
 @pytest.mark.parametrize(
     "overrides",
     [{}, {"filter": {"association": "nearest"}, "sensor": {"clutter_rate": 0.5, "detection_prob": 0.9}}],
     ids=["known", "nearest-clutter"],
 )
-def test_truth_gain_is_the_drop_of_the_squared_errors_of_landmarks_seen_before(overrides):
+def test_truth_and_belief_gains_are_the_drops_over_the_landmarks_seen_before(overrides):
+    """The truth gain drops the squared errors, the belief gain the traces tr Sigma_jj, both over the slots
+    that held a landmark before and after the step (the same set)."""
     env = EKFSLAMEnv(max_episode_steps=300, **overrides)
     _, info = env.reset(seed=5)
-    assert info["truth_gain"] == 0.0
-    before = _errors(env)
+    assert info["truth_gain"] == 0.0 and info["belief_gain"] == 0.0
+    before, traces_before = _errors(env), _traces(env)
     nonzero = 0
     for action in _held_actions(1, 300):
         _, _, terminated, truncated, info = env.step(action)
-        now = _errors(env)
+        now, traces = _errors(env), _traces(env)
         both = np.isfinite(before) & np.isfinite(now)
+        assert np.array_equal(both, np.isfinite(traces_before) & np.isfinite(traces))
         expected = float(np.sum(before[both] - now[both]))
         assert info["truth_gain"] == pytest.approx(expected, rel=0, abs=1e-12)
-        nonzero += info["truth_gain"] != 0.0
-        before = now
+        expected = float(np.sum(traces_before[both] - traces[both]))
+        assert info["belief_gain"] == pytest.approx(expected, rel=0, abs=1e-12)
+        nonzero += info["truth_gain"] != 0.0 and info["belief_gain"] != 0.0
+        before, traces_before = now, traces
         if terminated or truncated:
             break
     assert nonzero > 100  # the test saw landmarks being corrected, not an empty sum
 
 
-def test_truth_gains_sum_to_the_first_errors_less_the_final_ones():
-    """With known association a seen landmark stays seen, so the gains telescope per landmark: their sum over
-    an episode is sum_j (e_j when first seen - e_j at the end), whatever the step at which each was first seen."""
+def test_truth_and_belief_gains_sum_to_the_first_values_less_the_final_ones():
+    """With known association a seen landmark stays seen, so the gains telescope per landmark: over an episode
+    the truth gains sum to sum_j (e_j when first seen - e_j at the end), and the belief gains to
+    sum_j (tr Sigma_jj when first seen - tr Sigma_jj at the end), whatever the step at which each was first seen."""
     env = EKFSLAMEnv(max_episode_steps=400)
     env.reset(seed=8)
-    first = _errors(env)
-    total = 0.0
+    first, first_traces = _errors(env), _traces(env)
+    total, belief = 0.0, 0.0
     for action in _held_actions(2, 400):
         _, _, terminated, truncated, info = env.step(action)
         total += info["truth_gain"]
-        now = _errors(env)
+        belief += info["belief_gain"]
+        now, traces = _errors(env), _traces(env)
         new = np.isnan(first) & np.isfinite(now)
-        first[new] = now[new]
+        first[new], first_traces[new] = now[new], traces[new]
         if terminated or truncated:
             break
     seen = np.isfinite(first)
     assert seen.sum() >= 10
     assert total == pytest.approx(float(np.sum(first[seen] - now[seen])), rel=0, abs=1e-9)
-    assert total > 0  # the seeded map improved on its first readings
+    assert belief == pytest.approx(float(np.sum(first_traces[seen] - traces[seen])), rel=0, abs=1e-9)
+    assert total > 0 and belief > 0  # the seeded map improved on its first readings, and the filter knows it
 
 
-def test_reward_is_unchanged_by_the_truth_gain():
-    """The truth gain is information only: the reward's terms stay those of ``reward_terms``."""
+def test_belief_gain_is_zero_on_a_failed_step():
+    env = EKFSLAMEnv()
+    env.reset(seed=0)
+    env.filter._cov[:] = -np.eye(env.filter.state_size)
+    env.filter._tracking = True
+    *_, info = env.step(np.zeros(2))
+    assert info["filter_failed"] and info["belief_gain"] == 0.0 and info["truth_gain"] == 0.0
+
+
+def test_reward_is_unchanged_by_the_truth_and_belief_gains():
+    """The truth and belief gains are information only: the reward's terms stay those of ``reward_terms``."""
     env = EKFSLAMEnv(max_episode_steps=50)
     _, info = env.reset(seed=0)
     for action in _held_actions(3, 50):
         _, reward, _, _, step_info = env.step(action)
-        assert "truth_gain" not in step_info["reward_terms"]
+        assert (
+            "truth_gain" not in step_info["reward_terms"] and "belief_gain" not in step_info["reward_terms"]
+        )
         assert reward == sum(step_info["reward_terms"].values(), 0.0)
 
 
@@ -106,9 +134,15 @@ def test_gain_correlation_known_answers():
         metrics.gain_correlation(x, x[:-1])
 
 
-def test_evaluation_reports_the_correlation_of_the_episodes_gains():
-    """run_episode correlates the drops of info["log_det"] with info["truth_gain"], step by step."""
-    from ekfslam_gym.evaluation.episodes import make_env, run_episode
+@pytest.mark.parametrize(
+    "overrides",
+    [{}, {"filter": {"association": "nearest"}, "sensor": {"clutter_rate": 0.5, "detection_prob": 0.9}}],
+    ids=["known", "nearest-clutter"],
+)
+def test_evaluation_reports_the_belief_truth_correlation_and_the_final_map_nees(overrides):
+    """run_episode correlates info["belief_gain"] with info["truth_gain"], step by step, and scores the final
+    map: the joint NEES of the slots holding a landmark, over its 2 n dof."""
+    from ekfslam_gym.evaluation.episodes import BELIEF_KEYS, METRIC_KEYS, make_env, run_episode
 
     class Held:
         name = "held"
@@ -120,19 +154,26 @@ def test_evaluation_reports_the_correlation_of_the_episodes_gains():
             self.t += 1
             return self.actions[self.t - 1]
 
-    env = make_env("EKFSLAM-v0", max_episode_steps=120)
+    assert set(BELIEF_KEYS) <= set(METRIC_KEYS)
+    env = make_env("EKFSLAM-v0", overrides, max_episode_steps=120)
     row = run_episode(env, Held(), 4)
     # The same episode again, its two series recorded here.
-    _, info = env.reset(seed=4)
+    env.reset(seed=4)
     agent = Held()
     agent.reset(env, seed=4)
-    log_det, belief, truth = info["log_det"], [], []
+    belief, truth = [], []
     for _ in range(120):
         _, _, terminated, truncated, info = env.step(agent.act(None))
-        belief.append(log_det - info["log_det"])
+        belief.append(info["belief_gain"])
         truth.append(info["truth_gain"])
-        log_det = info["log_det"]
         if terminated or truncated:
             break
-    assert (row["gain_pearson"], row["gain_spearman"]) == metrics.gain_correlation(belief, truth)
-    assert -1.0 <= row["gain_pearson"] <= 1.0 and -1.0 <= row["gain_spearman"] <= 1.0
+    expected = metrics.gain_correlation(belief, truth)
+    assert (row["belief_truth_pearson"], row["belief_truth_spearman"]) == expected
+    assert 0.0 < row["belief_truth_pearson"] <= 1.0 and -1.0 <= row["belief_truth_spearman"] <= 1.0
+    u = env.unwrapped
+    slots = np.flatnonzero(np.isfinite(_errors(u)))
+    index = (3 + 2 * slots[:, None] + np.arange(2)).ravel()
+    error = np.asarray(u.filter.mean)[index] - u.true_landmarks[np.asarray(u.slot_truth)[slots]].ravel()
+    nees = error @ np.linalg.inv(np.asarray(u.filter.cov)[np.ix_(index, index)]) @ error
+    assert row["map_nees"] == pytest.approx(nees / index.size, rel=1e-9)

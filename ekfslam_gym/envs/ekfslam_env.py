@@ -82,9 +82,14 @@ class EKFSLAMEnv(gym.Env):
     (with unknown association: the slots holding a true landmark, each against the landmark it holds). A
     landmark first seen in a step enters the sum from the next step on, so its initial error counts as no
     loss; the pose is not included. Over an episode with known association the truth gains sum to
-    sum_j (e_j at first sight - e_j at the end). A macro step sums it over its control steps. The evaluation
-    reports, per episode, the correlation of the two (``ekfslam_gym.evaluation.episodes``): a policy paid for
-    information that makes the map no better shows a low one.
+    sum_j (e_j at first sight - e_j at the end). ``info["belief_gain"]`` (m^2) is its counterpart in the
+    belief, over exactly the same landmarks (slots): the drop of the sum of their marginal position variances
+    tr Sigma_jj (the trace of each 2x2 block), which is what a consistent filter expects the squared error to
+    drop by (E e_j = tr Sigma_jj); with known association the belief gains sum over an episode to
+    sum_j (tr Sigma_jj at first sight - tr Sigma_jj at the end). Both are 0 at reset and on a failed step; a
+    macro step sums each over its control steps. The evaluation reports, per episode, the correlation of the
+    belief and truth gains and the final map NEES (``ekfslam_gym.evaluation.episodes``): a policy paid for
+    information that makes the map no better shows a low correlation, and an over-confident map a NEES above 1.
 
     ## Starting State
     The robot at the layout's start pose, known to the filter (pose prior ``filter.pose_prior``); ``reset``
@@ -232,8 +237,10 @@ class EKFSLAMEnv(gym.Env):
         # The true position each slot holds and which initialised slots hold one (unknown association only).
         self._slot_landmarks = self._true_landmarks.copy() if known else np.zeros_like(self._true_landmarks)
         self._slot_valid = np.zeros(layout.n_landmarks, dtype=bool)
-        # Each slot's squared position error at the last step (-1: not seen then), for the truth gain.
+        # Each slot's squared position error at the last step (-1: not seen then), for the truth gain, and
+        # the trace of its marginal position covariance then, for the belief gain.
         self._errors = np.full(layout.n_landmarks, -1.0)
+        self._traces = np.zeros(layout.n_landmarks)
         self._false_associations = 0
         self._missed_associations = 0
         self._t = 0
@@ -264,13 +271,13 @@ class EKFSLAMEnv(gym.Env):
         self._odometry_cov = np.zeros((self._odometry.size, self._odometry.size))
         self._newly_covered = self._mark_and_trail()
         if self._unknown:
-            nees, rmse, _, self._worst_variance, seen, _ = self._unknown_metrics(read)
+            nees, rmse, _, self._worst_variance, seen, _, _ = self._unknown_metrics(read)
         else:
-            nees, rmse, _, self._worst_variance, seen, _ = compiled.step_metrics(
+            nees, rmse, _, self._worst_variance, seen, _, _ = compiled.step_metrics(
                 mean, cov, observed, self._world.pose_tuple, self._true_landmarks, readings.ids,
-                self._last_seen, self._errors, self._t, cfg.loop_gap,
+                self._last_seen, self._errors, self._traces, self._t, cfg.loop_gap,
             )  # fmt: skip
-        info = self._info({"info_gain": 0.0}, nees, rmse, seen, 0.0)
+        info = self._info({"info_gain": 0.0}, nees, rmse, seen, 0.0, 0.0)
         if self.render_mode == "human":
             self.render()
         return self._observation(), info
@@ -280,12 +287,14 @@ class EKFSLAMEnv(gym.Env):
             raise gym.error.ResetNeeded("call reset() before step()")
         if self._single:
             a0, a1 = clipped_velocity(action)
-            terms, reward, terminated, nees, rmse, seen, truth_gain, failed = self._control_step(a0, a1)
+            terms, reward, terminated, nees, rmse, seen, truth_gain, belief_gain, failed = self._control_step(
+                a0, a1
+            )
             self._steps += 1
             if failed:
                 return self._failed_step()
             truncated = not terminated and self._is_truncated()
-            info = self._info(terms, nees, rmse, seen, truth_gain)
+            info = self._info(terms, nees, rmse, seen, truth_gain, belief_gain)
             if self.render_mode == "human":
                 self.render()
             return self._observation(), reward, terminated, truncated, info
@@ -297,19 +306,22 @@ class EKFSLAMEnv(gym.Env):
         mean = self._belief[0]
         interface.begin(action, mean[:3])
         totals: dict[str, float] = {}
-        reward, truth_gain, collided, terminated, inner = 0.0, 0.0, False, False, []
+        reward, truth_gain, belief_gain, collided, terminated, inner = 0.0, 0.0, 0.0, False, False, []
         for _ in range(self._hold):
             command = interface.command(mean[:3], self._world.scan)
             if command is None and inner:
                 break
             a0, a1 = (0.0, 0.0) if command is None else command
-            terms, step_reward, terminated, nees, rmse, seen, step_truth, failed = self._control_step(a0, a1)
+            terms, step_reward, terminated, nees, rmse, seen, step_truth, step_belief, failed = (
+                self._control_step(a0, a1)
+            )
             inner.append((a0, a1))
             if failed:
                 self._steps += 1
                 return self._failed_step(inner)
             reward += step_reward
             truth_gain += step_truth
+            belief_gain += step_belief
             collided = collided or self._collided
             for name, value in terms.items():
                 totals[name] = totals.get(name, 0.0) + value
@@ -317,7 +329,7 @@ class EKFSLAMEnv(gym.Env):
                 break
         self._steps += 1
         truncated = not terminated and self._is_truncated()
-        info = self._info(totals, nees, rmse, seen, truth_gain)
+        info = self._info(totals, nees, rmse, seen, truth_gain, belief_gain)
         info["collision"] = collided
         info["inner_steps"] = len(inner)
         info["inner_actions"] = np.array(inner, dtype=np.float64)
@@ -328,7 +340,7 @@ class EKFSLAMEnv(gym.Env):
     def _control_step(self, a0: float, a1: float):
         """One control step of ``dt`` with the normalised command (a0, a1) already clipped: physics, odometry,
         readings, filter, reward terms and metrics. Returns (terms, reward, terminated, nees, rmse, seen,
-        truth_gain, failed); the caller builds the observation and info once per env step."""
+        truth_gain, belief_gain, failed); the caller builds the observation and info once per env step."""
         ekf = self._ekf
         world, rng = self._world, self.np_random
         x0, y0, _ = world.pose_tuple
@@ -354,7 +366,7 @@ class EKFSLAMEnv(gym.Env):
         except FilterDivergedError:
             failed = True
         if failed:
-            return None, 0.0, True, math.nan, math.nan, 0, 0.0, True
+            return None, 0.0, True, math.nan, math.nan, 0, 0.0, 0.0, True
 
         mean, cov, observed, _ = self._belief
         self._prev_log_det, self._log_det = self._log_det, ekf.log_det
@@ -362,14 +374,16 @@ class EKFSLAMEnv(gym.Env):
         terms = self._rewards()
         reward = sum(terms.values(), 0.0)
         if unknown:
-            nees, rmse, closures, self._worst_variance, seen, truth_gain = self._unknown_metrics(read)
+            nees, rmse, closures, self._worst_variance, seen, truth_gain, belief_gain = self._unknown_metrics(
+                read
+            )
         else:
-            nees, rmse, closures, self._worst_variance, seen, truth_gain = compiled.step_metrics(
+            nees, rmse, closures, self._worst_variance, seen, truth_gain, belief_gain = compiled.step_metrics(
                 mean, cov, observed, world.pose_tuple, self._true_landmarks, readings.ids, self._last_seen,
-                self._errors, self._t, self.config.loop_gap,
+                self._errors, self._traces, self._t, self.config.loop_gap,
             )  # fmt: skip
         self._loop_closures += closures
-        return terms, reward, self._is_terminated(), nees, rmse, seen, truth_gain, False
+        return terms, reward, self._is_terminated(), nees, rmse, seen, truth_gain, belief_gain, False
 
     def _correct_unknown(self, readings: Readings) -> np.ndarray:
         """Correct with the step's readings without telling the filter their ids (``filter.association``), or,
@@ -407,14 +421,14 @@ class EKFSLAMEnv(gym.Env):
         mean, cov, _, _ = self._belief
         return compiled.step_metrics(
             mean, cov, self._slot_valid, self._world.pose_tuple, self._slot_landmarks, read_slots,
-            self._last_seen, self._errors, self._t, self.config.loop_gap,
+            self._last_seen, self._errors, self._traces, self._t, self.config.loop_gap,
         )  # fmt: skip
 
     def _failed_step(self, inner: list | None = None):
         """The step on which the filter failed numerically: terminated, reward 0, the last observation."""
         self._filter_failed = True
         observed = self._belief[2]
-        info = self._info({"info_gain": 0.0}, math.nan, math.nan, int(np.count_nonzero(observed)), 0.0)
+        info = self._info({"info_gain": 0.0}, math.nan, math.nan, int(np.count_nonzero(observed)), 0.0, 0.0)
         if inner is not None:
             info["inner_steps"] = len(inner)
             info["inner_actions"] = np.array(inner, dtype=np.float64)
@@ -465,7 +479,13 @@ class EKFSLAMEnv(gym.Env):
         return self._steps >= self._max_steps
 
     def _info(
-        self, terms: dict[str, float], nees: float, rmse: float, landmarks_seen: int, truth_gain: float
+        self,
+        terms: dict[str, float],
+        nees: float,
+        rmse: float,
+        landmarks_seen: int,
+        truth_gain: float,
+        belief_gain: float,
     ) -> dict[str, Any]:
         """The step's ``info``; arrays the filter updates in place are copied, the odometry's are new each step."""
         mean, cov, _, _ = self._belief
@@ -477,6 +497,7 @@ class EKFSLAMEnv(gym.Env):
             "log_det": self._log_det,
             "reward_terms": terms,
             "truth_gain": truth_gain,
+            "belief_gain": belief_gain,
             "landmarks_seen": landmarks_seen,
             "collision": self._collided,
             "collisions": self._collisions,

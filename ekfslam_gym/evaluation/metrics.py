@@ -8,8 +8,8 @@ check each on a case with a known answer.
 - ``landmark_errors``: RMSE of the seen landmarks and the number of landmarks never seen.
 - ``nees`` / ``nees_bounds``: normalised estimation error squared of a Gaussian estimate and its two-sided
   chi-squared bounds; ``anees`` averages NEES and ``fraction_in_bounds`` counts the steps inside the bounds.
-- ``gain_correlation``: Pearson and Spearman correlation of two per-step series (the information gain the
-  filter believes in and the truth gain, the drop of the seen landmarks' squared error).
+- ``gain_correlation``: Pearson and Spearman correlation of two per-step series (the gain the filter believes
+  in, the drop of the seen landmarks' position variances, and the truth gain, the drop of their squared error).
 - ``iqm`` / ``bootstrap_ci``: the interquartile mean (robust to a few failed episodes, as in rliable) and a
   seeded percentile-bootstrap confidence interval of it.
 """
@@ -142,8 +142,8 @@ def gain_correlation(belief: np.ndarray, truth: np.ndarray) -> tuple[float, floa
     """(Pearson r, Spearman rho) of two equally long per-step series, over the steps where both are finite.
 
     NaN where undefined: fewer than 3 such steps, or either series constant on them (no variation to
-    correlate). Spearman is Pearson on the ranks (ties averaged), so it is not ruled by the few large
-    information gains of discovery steps.
+    correlate). Spearman is Pearson on the ranks (ties averaged), so it is not ruled by a few large steps
+    (the first corrections of newly seen landmarks).
     """
     belief = np.asarray(belief, dtype=float).reshape(-1)
     truth = np.asarray(truth, dtype=float).reshape(-1)

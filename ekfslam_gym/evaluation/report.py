@@ -33,8 +33,9 @@ BETTER: dict[str, str | None] = {
     "loop_closures": "higher",
     "collisions": "lower",
     "path_length": None,
-    "gain_pearson": "higher",
-    "gain_spearman": "higher",
+    "belief_truth_pearson": "higher",
+    "belief_truth_spearman": "higher",
+    "map_nees": None,
     "false_associations": "lower",
     "missed_associations": "lower",
 }
