@@ -88,3 +88,44 @@ def test_consistency_command_line(tmp_path, capsys):
     assert plot.stat().st_size > 0
     with pytest.raises(SystemExit):
         main(["--filters", "ukf"])
+
+
+class _Sequence:
+    """A fixed sequence of primitive indices, one per call of act."""
+
+    def __init__(self, choices):
+        self.choices = list(choices)
+
+    def reset(self, env, seed=None):
+        self.calls = 0
+
+    def act(self, observation):
+        choice = self.choices[self.calls % len(self.choices)]
+        self.calls += 1
+        return choice
+
+
+def test_decisions_repeated_per_control_step_drive_as_the_macro_action_does():
+    """decide_every N on hold 1 reaches the same world and belief as hold N, and asks the agent every N steps."""
+    choices = [1, 4, 4, 7, 0]
+    macro = gym.make("EKFSLAM-v0", action={"kind": "primitives", "hold": 10})
+    macro.reset(seed=3)
+    for choice in choices:
+        macro.step(choice)
+    agent = _Sequence(choices)
+
+    def factory():
+        return gym.make("EKFSLAM-v0", action={"kind": "primitives", "hold": 1}, max_episode_steps=50)
+
+    run = run_consistency(factory, agent, [3], 50, "seq", decide_every=10)
+    assert agent.calls == len(choices)
+    assert run.dofs["pose_nees"].tolist() == [3] * 50  # every control step sampled
+    with pytest.raises(ValueError, match="decide_every"):
+        run_consistency(factory, agent, [3], 5, "seq", decide_every=0)
+    single = factory()
+    single.reset(seed=3)
+    for choice in choices:
+        for _ in range(10):
+            single.step(choice)
+    np.testing.assert_array_equal(single.unwrapped.world.pose, macro.unwrapped.world.pose)
+    np.testing.assert_array_equal(single.unwrapped.filter.mean, macro.unwrapped.filter.mean)

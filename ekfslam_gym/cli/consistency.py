@@ -6,7 +6,10 @@ python -m ekfslam_gym.consistency [--env-id EKFSLAM-v0] [--agents random,circle]
 
 Each value is the sum over runs divided by the summed degrees of freedom (1 when consistent); "inside" is the
 fraction of steps within the 95 % band. The default seeds 0-49 are neither the held-out suite nor the
-evaluation seeds.
+evaluation seeds. Every control step is sampled: a policy whose training record (beside ``--model``) has macro
+actions (``action.kind`` primitives, held N steps) runs with that action kind held 1 step, asked every N steps
+and its action repeated in between, which drives exactly as the macro action does. ``--steps`` counts control
+steps.
 """
 
 from __future__ import annotations
@@ -86,14 +89,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     runs = []
     for name in agents:
         agent = make_agent(name, model_path=args.model) if name == "ppo" else make_agent(name)
+        trained_action = dict((getattr(agent, "trained_env_kwargs", None) or {}).get("action") or {})
+        decide_every = int(trained_action.get("hold", 1))
+        if trained_action.get("kind", "velocity") == "waypoint":
+            parser.error("a waypoint policy's macro steps cannot be sampled per control step")
         for variant in filters:
             overrides = dict(args.env_kwargs or {})
             overrides["filter"] = {**overrides.get("filter", {}), "variant": variant}
+            if trained_action:
+                overrides["action"] = {**trained_action, "hold": 1}
 
             def factory(overrides=overrides):
                 return gym.make(args.env_id, max_episode_steps=args.steps, **overrides)
 
-            runs.append(run_consistency(factory, agent, args.seeds, args.steps, f"{name} / {variant}"))
+            runs.append(
+                run_consistency(factory, agent, args.seeds, args.steps, f"{name} / {variant}", decide_every)
+            )
             print(f"done: {name} / {variant}", file=sys.stderr)
 
     summaries = [run.summary() for run in runs]

@@ -111,11 +111,18 @@ def innovation_nis(
     return float(nu @ np.linalg.solve(S, nu)), int(nu.size)
 
 
-def run_consistency(env_factory, agent, seeds, steps: int, label: str) -> ConsistencyRun:
+def run_consistency(
+    env_factory, agent, seeds, steps: int, label: str, decide_every: int = 1
+) -> ConsistencyRun:
     """Drive ``agent`` for ``steps`` steps in a fresh env from ``env_factory()`` per seed; sums per step.
 
-    Steps after an episode ended early add nothing (their dof stays 0 for that run).
+    The env must take one control step per env step (``action.hold`` 1), so that every control step is
+    sampled. A policy trained with macro actions held for N control steps drives the same way with
+    ``decide_every=N``: it is asked every N steps and its action repeated in between. Steps after an episode
+    ended early add nothing (their dof stays 0 for that run).
     """
+    if decide_every < 1:
+        raise ValueError(f"decide_every must be >= 1, got {decide_every}")
     sums = {q: np.zeros(steps) for q in QUANTITIES}
     dofs = {q: np.zeros(steps, dtype=np.int64) for q in QUANTITIES}
     seeds = list(seeds)
@@ -130,7 +137,9 @@ def run_consistency(env_factory, agent, seeds, steps: int, label: str) -> Consis
         Q = base.filter.measurement_noise
         for t in range(steps):
             prior = base.filter.copy()
-            observation, _, terminated, truncated, info = env.step(agent.act(observation))
+            if t % decide_every == 0:
+                action = agent.act(observation)
+            observation, _, terminated, truncated, info = env.step(action)
             ekf = base.filter
             if info["filter_failed"]:
                 break
