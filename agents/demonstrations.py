@@ -98,6 +98,13 @@ class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
         self._executed, self._start = index, pose
         return np.int64(index)
 
+    def executed(self, index: int) -> None:
+        """Note that primitive ``index`` was executed instead of the planner's choice (a learner drove, the
+        planner only labels: DAgger), so the coverage grid is marked along the path actually driven and the
+        commitment bonus goes to the primitive being executed."""
+        if int(index) != self._executed:
+            self._executed = self._current = int(index)
+
     def __repr__(self) -> str:
         return f"GreedyPrimitivesPlanner(horizon={self.horizon})"
 
@@ -162,10 +169,15 @@ def collect(
     planner: str = "greedy",
     planner_kwargs: Mapping[str, Any] | None = None,
     eval_seeds: Iterable[int] = range(20000, 20010),
+    driver: Any = None,
 ) -> Demonstrations:
     """One episode of the planner per seed in ``env_id`` built as the trainer builds its envs
     (``gym.make(id, **env_kwargs)``, so ``max_episode_steps`` is gym.make's limit); the env must use
-    ``action.kind: primitives``. Seeds are checked with ``check_seeds``."""
+    ``action.kind: primitives``. Seeds are checked with ``check_seeds``.
+
+    With ``driver`` (an ``Agent``, e.g. the policy being cloned), the driver's actions are executed and the
+    planner only labels each visited observation with its own choice: the states the learner reaches, labelled
+    by the expert (DAgger; Ross, Gordon & Bagnell 2011). ``rewards`` are then the driven episode's."""
     import ekfslam_gym  # noqa: F401  (registers the env ids)
 
     seeds = check_seeds(seeds, eval_seeds)
@@ -180,10 +192,14 @@ def collect(
         for k, seed in enumerate(seeds):
             observation, _ = env.reset(seed=seed)
             agent.reset(env, seed=seed)
+            if driver is not None:
+                driver.reset(env, seed=seed)
             while True:
-                action = agent.act(observation)
+                label = agent.act(observation)
+                action = label if driver is None else np.int64(driver.act(observation))
+                agent.executed(int(action))
                 observations.append(observation)
-                actions.append(int(action))
+                actions.append(int(label))
                 episodes.append(k)
                 observation, reward, terminated, truncated, _ = env.step(action)
                 rewards.append(float(reward))
@@ -195,9 +211,26 @@ def collect(
         stacked: Any = {key: np.stack([o[key] for o in observations]) for key in observations[0]}
     else:
         stacked = np.stack(observations)
-    meta = {"env_id": env_id, "env_kwargs": dict(env_kwargs or {}), "planner": planner}
+    meta = {"env_id": env_id, "env_kwargs": dict(env_kwargs or {}), "planner": planner,
+            "driver": None if driver is None else getattr(driver, "name", type(driver).__name__)}  # fmt: skip
     return Demonstrations(stacked, np.array(actions, dtype=np.int64), np.array(rewards, dtype=np.float64),
                           np.array(episodes, dtype=np.int64), np.array(seeds, dtype=np.int64), meta)  # fmt: skip
+
+
+def concatenate(first: Demonstrations, second: Demonstrations) -> Demonstrations:
+    """``first`` then ``second`` as one set (``second``'s episodes numbered after ``first``'s); ``first``'s meta."""
+    if isinstance(first.observations, Mapping):
+        observations: Any = {
+            k: np.concatenate([v, second.observations[k]]) for k, v in first.observations.items()
+        }
+    else:
+        observations = np.concatenate([first.observations, second.observations])
+    return Demonstrations(
+        observations, np.concatenate([first.actions, second.actions]),
+        np.concatenate([first.rewards, second.rewards]),
+        np.concatenate([first.episodes, second.episodes + len(first.seeds)]),
+        np.concatenate([first.seeds, second.seeds]), dict(first.meta),
+    )  # fmt: skip
 
 
 def save(demos: Demonstrations, path: str | Path) -> Path:

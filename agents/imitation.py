@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .demonstrations import PLANNERS, Demonstrations, check_seeds, collect, load, save
+from .demonstrations import PLANNERS, Demonstrations, check_seeds, collect, concatenate, load, save
 
 PRETRAIN_DEFAULTS: dict[str, Any] = {
     "planner": "greedy",  # the demonstrator (agents.demonstrations.PLANNERS)
@@ -35,6 +35,8 @@ PRETRAIN_DEFAULTS: dict[str, Any] = {
     "holdout": 0.1,  # fraction of the demonstration episodes held back to report accuracy on
     "value": True,  # also fit the value head to the demonstrations' discounted (normalised) returns
     "path": None,  # a demonstrations .npz to reuse instead of collecting (it must match env id and env_kwargs)
+    "dagger_rounds": 0,  # DAgger rounds after cloning: the clone drives, the planner labels, clone again
+    "dagger_episodes": 50,  # episodes per DAgger round, on the seeds after seed + episodes (path: those too)
 }
 DEMONSTRATIONS_FILE = "demonstrations.npz"
 BC_MODEL = "bc_model"  # the cloned policy, before any PPO update, saved with its statistics in the run folder
@@ -58,7 +60,8 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
     settings = {**PRETRAIN_DEFAULTS, **value}
     if settings["planner"] not in PLANNERS:
         raise ValueError(f"pretrain.planner must be one of {list(PLANNERS)}, got {settings['planner']!r}")
-    for key, low in (("episodes", 1), ("seed", 0), ("epochs", 1), ("batch_size", 1)):
+    for key, low in (("episodes", 1), ("seed", 0), ("epochs", 1), ("batch_size", 1), ("dagger_rounds", 0),
+                     ("dagger_episodes", 1)):  # fmt: skip
         if isinstance(settings[key], bool) or not isinstance(settings[key], int) or settings[key] < low:
             raise ValueError(f"pretrain.{key} must be an integer >= {low}, got {settings[key]!r}")
     rate = settings["learning_rate"]
@@ -76,14 +79,22 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
         start = int(entry.get("eval_seed", 20000))
         eval_seeds = range(start, start + int(entry.get("eval_episodes", 10)))
     try:
-        check_seeds(demonstration_seeds(settings), eval_seeds)
+        check_seeds(demonstration_seeds(settings, -1), eval_seeds)
     except ValueError as error:
         raise ValueError(f"pretrain.seed/episodes: {error}") from None
     return settings
 
 
-def demonstration_seeds(settings: Mapping[str, Any]) -> range:
-    return range(int(settings["seed"]), int(settings["seed"]) + int(settings["episodes"]))
+def demonstration_seeds(settings: Mapping[str, Any], round_: int | None = None) -> range:
+    """The planner's seeds (``round_`` None), those of DAgger round ``round_`` (0, 1, ...), or with ``round_`` -1
+    all of them: one block of consecutive seeds from ``seed``."""
+    first, n, per = int(settings["seed"]), int(settings["episodes"]), int(settings.get("dagger_episodes", 0))
+    if round_ is None:
+        return range(first, first + n)
+    if round_ < 0:
+        return range(first, first + n + int(settings.get("dagger_rounds", 0)) * per)
+    start = first + n + round_ * per
+    return range(start, start + per)
 
 
 # ---------------------------------------------------------------------------------------------- normalisation
@@ -173,11 +184,13 @@ def behaviour_clone(
     holdout: float = 0.1,
     value: bool = True,
     seed: int = 0,
+    held: np.ndarray | None = None,
 ) -> CloneReport:
     """Train ``model.policy`` (an SB3 actor-critic on a Discrete action space) to choose the demonstrated
     actions; the observations are normalised by the model's VecNormalize, if any (fit it first:
     ``fit_normalizer``). With ``value``, the value head also regresses the demonstrations' discounted returns
-    (rewards normalised as the VecNormalize would, discounted with ``model.gamma``)."""
+    (rewards normalised as the VecNormalize would, discounted with ``model.gamma``). ``held`` (bool per pair)
+    fixes the held-back pairs, else ``holdout`` of the episodes are drawn with ``seed``."""
     import torch
     from gymnasium import spaces
     from stable_baselines3.common.utils import obs_as_tensor
@@ -199,7 +212,10 @@ def behaviour_clone(
         rewards = normalizer.normalize_reward(rewards)
     targets = returns_to_go(rewards, demos.episodes, float(model.gamma))
     actions = demos.actions.astype(np.int64)
-    train_idx, hold_idx = split_episodes(demos.episodes, holdout, rng)
+    if held is None:
+        train_idx, hold_idx = split_episodes(demos.episodes, holdout, rng)
+    else:
+        train_idx, hold_idx = np.flatnonzero(~held), np.flatnonzero(held)
 
     def take(index: np.ndarray) -> Any:
         if isinstance(observations, Mapping):
@@ -271,25 +287,61 @@ def demonstrations_for(
 
 def pretrain(model: Any, env_id: str, entry: Mapping[str, Any], out: Path) -> dict[str, Any] | None:
     """The ``pretrain`` step of a training run (no-op without the setting): demonstrations, normalisation
-    statistics fitted to them, behaviour cloning; writes ``pretrain.json`` (settings and ``CloneReport``) and the
-    cloned policy as ``bc_model.zip`` (with its statistics and the run's config) in ``out``."""
+    statistics fitted to them, behaviour cloning, then ``dagger_rounds`` DAgger rounds (the clone drives
+    ``dagger_episodes`` episodes, the planner labels the observations it reaches, the clone is trained again on
+    everything; Ross, Gordon & Bagnell 2011). Writes ``pretrain.json`` (settings, one ``CloneReport`` per
+    round, and per DAgger round the fraction of the clone's own decisions that matched the planner's) and the
+    cloned policy as ``bc_model.zip`` (with its statistics and the run's config) in ``out``; with DAgger, the
+    aggregated pairs as ``dagger.npz``."""
     settings = validate_pretrain(entry.get("pretrain"), entry)
     if settings is None:
         return None
+    from .ppo import PPOAgent
     from .training import save_with_stats
 
     out = Path(out)
     start = time.perf_counter()
     demos = demonstrations_for(env_id, entry, settings, out)
     collected = time.perf_counter() - start
+    reused = set(demos.seeds.tolist()) & set(demonstration_seeds(settings, -1)[settings["episodes"] :])
+    if reused:
+        raise ValueError(
+            f"DAgger seeds {sorted(reused)[:5]} are among the demonstrations' own; move pretrain.seed"
+        )
+    rng = np.random.default_rng(settings["seed"])
+    held = np.isin(
+        demos.episodes, demos.episodes[split_episodes(demos.episodes, settings["holdout"], rng)[1]]
+    )
     normalizer = model.get_vec_normalize_env()
-    if normalizer is not None:
-        fit_normalizer(normalizer, demos)
-    report = behaviour_clone(model, demos, epochs=settings["epochs"], batch_size=settings["batch_size"],
-                             learning_rate=settings["learning_rate"], holdout=settings["holdout"],
-                             value=settings["value"], seed=settings["seed"])  # fmt: skip
+
+    def clone(epochs: int) -> CloneReport:
+        if normalizer is not None:
+            fit_normalizer(normalizer, demos)
+        return behaviour_clone(model, demos, epochs=epochs, batch_size=settings["batch_size"],
+                               learning_rate=settings["learning_rate"], value=settings["value"],
+                               seed=settings["seed"], held=held)  # fmt: skip
+
+    reports = [clone(settings["epochs"])]
+    agreement = []
+    eval_start = int(entry.get("eval_seed", 20000))
+    for round_ in range(settings["dagger_rounds"]):
+        tick = time.perf_counter()
+        more = collect(env_id, demonstration_seeds(settings, round_), dict(entry.get("env_kwargs") or {}),
+                       planner=settings["planner"], driver=PPOAgent(model=model, vecnormalize=normalizer),
+                       eval_seeds=range(eval_start, eval_start + int(entry.get("eval_episodes", 10))))  # fmt: skip
+        collected += time.perf_counter() - tick
+        # The clone drove deterministically, so its accuracy on what it reached is its agreement with the planner.
+        on_policy = behaviour_clone(model, more, epochs=0, held=np.ones(len(more), dtype=bool))
+        agreement.append(on_policy.holdout_accuracy)
+        split = split_episodes(more.episodes, settings["holdout"], rng)[1]
+        held = np.concatenate([held, np.isin(more.episodes, more.episodes[split])])
+        demos = concatenate(demos, more)
+        reports.append(clone(settings["epochs"]))
+    if settings["dagger_rounds"]:
+        save(demos, out / "dagger.npz")
     save_with_stats(model, out / BC_MODEL, out)
     record = {"settings": dict(settings), "pairs": len(demos), "episodes": int(len(demos.seeds)),
-              "demonstration_seconds": collected, "clone": asdict(report)}  # fmt: skip
+              "demonstration_seconds": collected, "clone": asdict(reports[-1]),
+              "rounds": [asdict(r) for r in reports], "dagger_agreement": agreement}  # fmt: skip
     (out / "pretrain.json").write_text(json.dumps(record, indent=2))
     return record

@@ -40,7 +40,12 @@ def test_demonstrations_have_the_env_shapes_and_valid_planner_actions(tmp_path):
     loaded = demo_mod.load(demo_mod.save(demos, tmp_path / "d.npz"))
     for name in ("observations", "actions", "rewards", "episodes", "seeds"):
         assert np.array_equal(getattr(loaded, name), getattr(demos, name)), name
-    assert loaded.meta == {"env_id": "EKFSLAM-v0", "env_kwargs": PRIMITIVE_KWARGS, "planner": "greedy"}
+    assert loaded.meta == {
+        "env_id": "EKFSLAM-v0",
+        "env_kwargs": PRIMITIVE_KWARGS,
+        "planner": "greedy",
+        "driver": None,
+    }
     # Deterministic: the same seeds give the same demonstrations.
     again = collect("EKFSLAM-v0", [30000, 30001], PRIMITIVE_KWARGS)
     assert np.array_equal(again.actions, demos.actions) and np.array_equal(
@@ -63,6 +68,28 @@ def test_planner_choices_are_the_greedy_agents_plan_from_the_belief():
     with pytest.raises(ValueError, match="primitives"):
         GreedyPrimitivesPlanner().reset(velocity, seed=0)
     velocity.close()
+
+
+class TurnInPlace:
+    """A driver that only turns in place (primitive 7): the robot stays where it started."""
+
+    name = "turn"
+
+    def reset(self, env, seed=None):
+        pass
+
+    def act(self, observation):
+        return np.int64(PRIMITIVES.index((0.0, 1.0)))
+
+
+def test_dagger_collection_executes_the_driver_and_records_the_planners_labels():
+    demos = collect("EKFSLAM-v0", [30003], PRIMITIVE_KWARGS, driver=TurnInPlace())
+    planner = collect("EKFSLAM-v0", [30003], PRIMITIVE_KWARGS)
+    assert demos.meta["driver"] == "turn" and len(demos) == 6
+    position = demos.observations[:, :2]  # the estimated position: the driver never moved the robot
+    assert np.ptp(position, axis=0).max() < 0.02 < np.ptp(planner.observations[:, :2], axis=0).max()
+    assert demos.actions[0] == planner.actions[0]  # the same first state, the same label
+    assert np.any(demos.actions != PRIMITIVES.index((0.0, 1.0)))  # labels are the planner's, not the driver's
 
 
 def test_demonstration_seeds_avoid_the_held_out_and_evaluation_seeds():
@@ -136,7 +163,9 @@ def test_pretrain_setting_validates():
     for bad, match in (({"episode": 5}, "unknown pretrain keys"), ({"planner": "lawnmower"}, "planner"),
                        ({"epochs": 0}, "epochs"), ({"episodes": 2.5}, "episodes"), ({"holdout": 1.0}, "holdout"),
                        ({"learning_rate": -1}, "learning_rate"), ({"value": "yes"}, "value"),
-                       ({"seed": 9990, "episodes": 20}, "held-out"), ("greedy", "mapping")):  # fmt: skip
+                       ({"seed": 9990, "episodes": 20}, "held-out"), ("greedy", "mapping"),
+                       ({"seed": 9900, "episodes": 50, "dagger_rounds": 1, "dagger_episodes": 60}, "held-out"),
+                       ({"dagger_rounds": -1}, "dagger_rounds")):  # fmt: skip
         with pytest.raises(ValueError, match=match):
             validate_pretrain(bad)
     with pytest.raises(ValueError, match="evaluation"):
@@ -184,12 +213,16 @@ def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
     train.main(["--resume", str(out), "--timesteps", "96", "--no-progress"])
     assert not (out / "pretrain.json").exists()  # resuming continues PPO, it does not clone again
 
-    # Reusing saved demonstrations: they must be of the run's env settings.
-    reuse = [*args[:5], str(tmp_path / "reuse"), *args[6:-2], f"pretrain={{path: {out / 'demonstrations.npz'}}}",
-             args[-1]]  # fmt: skip
+    # Reusing saved demonstrations (they must be of the run's env settings), and one DAgger round.
+    path = out / "demonstrations.npz"
+    reuse = [*args[:5], str(tmp_path / "reuse"), *args[6:-2],
+             f"pretrain={{path: {path}, epochs: 2, dagger_rounds: 1, dagger_episodes: 1}}", args[-1]]  # fmt: skip
     train.main(reuse)
-    assert json.loads((tmp_path / "reuse" / "pretrain.json").read_text())["pairs"] == 16
+    record = json.loads((tmp_path / "reuse" / "pretrain.json").read_text())
+    assert record["pairs"] == 24 and record["episodes"] == 3 and len(record["rounds"]) == 2
+    assert len(record["dagger_agreement"]) == 1 and 0 <= record["dagger_agreement"][0] <= 1
     assert not (tmp_path / "reuse" / "demonstrations.npz").exists()
+    assert demo_mod.load(tmp_path / "reuse" / "dagger.npz").seeds.tolist() == [30000, 30001, 30200]
     mismatch = [*reuse[:-1], "env_kwargs={action: {kind: primitives, hold: 5}, max_episode_steps: 8}"]
     with pytest.raises(ValueError, match="env_kwargs"):
         train.main(mismatch)
