@@ -11,15 +11,18 @@ id with the PPO hyperparameters plus ``n_timesteps``, ``n_envs``, ``normalize`` 
 its keyword arguments) and ``env_kwargs``. The settings only this script knows sit in a top-level
 ``train_settings`` section, keyed by env id, where rl-zoo3 does not look: ``vec_env`` (dummy | subproc),
 ``eval_freq``/``eval_episodes``/``eval_seed`` (model selection on evaluation seeds, never the held-out suite),
-``checkpoint_freq`` (total env steps) and ``torch_threads``. ``--hyperparams`` overrides either kind. The output
-folder receives:
+``checkpoint_freq`` (total env steps), ``torch_threads`` and ``pretrain`` (planner-guided training: the greedy
+planner's demonstrations cloned into the policy before PPO, ``agents.imitation``; absent means none, and a
+resumed run never clones again). ``--hyperparams`` overrides either kind. The output folder receives:
 
 - ``model.zip`` + ``model_vecnormalize.pkl``: the final policy and its normalisation statistics;
 - ``best_model.zip`` + ``best_model_vecnormalize.pkl``: the best on the evaluation seeds;
 - ``checkpoints/``: ``ppo_<steps>_steps.zip`` with ``..._vecnormalize.pkl`` and ``..._rng.pkl`` (random state);
 - ``config.yaml`` (the resolved entry and command line) and ``versions.json``, copied beside every model as
   ``<model>_config.yaml`` and ``<model>_versions.json``;
-- ``tb/`` tensorboard logs, ``monitor/`` episode logs, ``evaluations.npz`` and ``learning_curve.png``.
+- ``tb/`` tensorboard logs, ``monitor/`` episode logs, ``evaluations.npz`` and ``learning_curve.png``;
+- with ``pretrain``: ``bc_model.zip`` (+ statistics, config, versions), the cloned policy before any PPO update;
+  ``demonstrations.npz`` (``dagger.npz`` with DAgger rounds) and ``pretrain.json`` (settings, accuracies).
 
 ``--resume DIR`` continues the run in DIR from its last checkpoint: weights, optimiser state, normalisation
 statistics, timestep counter and random state; checkpoints are taken between rollouts, so the rollout that was
