@@ -190,7 +190,8 @@ def behaviour_clone(
     actions; the observations are normalised by the model's VecNormalize, if any (fit it first:
     ``fit_normalizer``). With ``value``, the value head also regresses the demonstrations' discounted returns
     (rewards normalised as the VecNormalize would, discounted with ``model.gamma``). ``held`` (bool per pair)
-    fixes the held-back pairs, else ``holdout`` of the episodes are drawn with ``seed``."""
+    fixes the held-back pairs, else ``holdout`` of the episodes are drawn with ``seed``, which also orders the
+    minibatches; torch's global generator is left alone, so the run's own seed still drives PPO afterwards."""
     import torch
     from gymnasium import spaces
     from stable_baselines3.common.utils import obs_as_tensor
@@ -203,7 +204,6 @@ def behaviour_clone(
     start = time.perf_counter()
     policy = model.policy
     rng = np.random.default_rng(seed)
-    torch.manual_seed(seed)
     normalizer = model.get_vec_normalize_env()
     observations = demos.observations
     rewards = demos.rewards
