@@ -11,15 +11,18 @@ id with the PPO hyperparameters plus ``n_timesteps``, ``n_envs``, ``normalize`` 
 its keyword arguments) and ``env_kwargs``. The settings only this script knows sit in a top-level
 ``train_settings`` section, keyed by env id, where rl-zoo3 does not look: ``vec_env`` (dummy | subproc),
 ``eval_freq``/``eval_episodes``/``eval_seed`` (model selection on evaluation seeds, never the held-out suite),
-``checkpoint_freq`` (total env steps) and ``torch_threads``. ``--hyperparams`` overrides either kind. The output
-folder receives:
+``checkpoint_freq`` (total env steps), ``torch_threads`` and ``pretrain`` (planner-guided training: the greedy
+planner's demonstrations cloned into the policy before PPO, ``agents.imitation``; absent means none, and a
+resumed run never clones again). ``--hyperparams`` overrides either kind. The output folder receives:
 
 - ``model.zip`` + ``model_vecnormalize.pkl``: the final policy and its normalisation statistics;
 - ``best_model.zip`` + ``best_model_vecnormalize.pkl``: the best on the evaluation seeds;
 - ``checkpoints/``: ``ppo_<steps>_steps.zip`` with ``..._vecnormalize.pkl`` and ``..._rng.pkl`` (random state);
 - ``config.yaml`` (the resolved entry and command line) and ``versions.json``, copied beside every model as
   ``<model>_config.yaml`` and ``<model>_versions.json``;
-- ``tb/`` tensorboard logs, ``monitor/`` episode logs, ``evaluations.npz`` and ``learning_curve.png``.
+- ``tb/`` tensorboard logs, ``monitor/`` episode logs, ``evaluations.npz`` and ``learning_curve.png``;
+- with ``pretrain``: ``bc_model.zip`` (+ statistics, config, versions), the cloned policy before any PPO update;
+  ``demonstrations.npz`` (``dagger.npz`` with DAgger rounds) and ``pretrain.json`` (settings, accuracies).
 
 ``--resume DIR`` continues the run in DIR from its last checkpoint: weights, optimiser state, normalisation
 statistics, timestep counter and random state; checkpoints are taken between rollouts, so the rollout that was
@@ -42,13 +45,17 @@ from typing import Any
 
 import yaml
 
+from .imitation import validate_pretrain
+
 NORMALIZE_DEFAULTS = {"norm_obs": True, "norm_reward": True}
 TRAIN_KEYS = {
     "n_timesteps", "policy", "n_envs", "vec_env", "normalize", "env_kwargs", "eval_freq", "eval_episodes",
-    "eval_seed", "checkpoint_freq", "torch_threads",
+    "eval_seed", "checkpoint_freq", "torch_threads", "pretrain",
 }  # fmt: skip
 SETTINGS_SECTION = "train_settings"
-SETTINGS_KEYS = {"vec_env", "eval_freq", "eval_episodes", "eval_seed", "checkpoint_freq", "torch_threads"}
+SETTINGS_KEYS = {
+    "vec_env", "eval_freq", "eval_episodes", "eval_seed", "checkpoint_freq", "torch_threads", "pretrain",
+}  # fmt: skip
 
 
 # ---------------------------------------------------------------------------------------------- config
@@ -84,8 +91,13 @@ def load_entry(config_path: Path, env_id: str) -> dict[str, Any]:
     entry.setdefault("eval_seed", 20_000)
     entry.setdefault("checkpoint_freq", 0)
     entry.setdefault("torch_threads", 1)
+    entry.setdefault("pretrain", None)
     if entry["vec_env"] not in ("dummy", "subproc"):
         raise SystemExit(f"vec_env must be dummy or subproc, got {entry['vec_env']!r}")
+    try:
+        entry["pretrain"] = validate_pretrain(entry["pretrain"], entry)
+    except ValueError as error:
+        raise SystemExit(f"{config_path}: {SETTINGS_SECTION} for {env_id!r}: {error}") from None
     return entry
 
 
@@ -309,6 +321,7 @@ def train(
     checkpoint = latest_checkpoint(out / "checkpoints") if resume else None
     if resume and checkpoint is None:
         raise ValueError(f"{out / 'checkpoints'} holds no checkpoint to resume from")
+    entry = {**entry, "pretrain": validate_pretrain(entry.get("pretrain"), entry)}  # after --hyperparams
 
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     import numpy as np
@@ -339,6 +352,12 @@ def train(
         model = PPO(
             entry["policy"], train_env, seed=seed, tensorboard_log=str(out / "tb"), verbose=0, **hyper
         )
+        if entry["pretrain"] is not None:  # planner-guided: behaviour cloning before PPO (agents.imitation)
+            from .imitation import pretrain
+
+            report = pretrain(model, env_id, entry, out)["clone"]
+            print(f"behaviour cloning: accuracy {report['train_accuracy']:.3f} on the demonstrations, "
+                  f"{report['holdout_accuracy']:.3f} on the held-back ones", file=sys.stderr)  # fmt: skip
         remaining = total
         reset = True
     else:

@@ -1,0 +1,257 @@
+"""Demonstrations of the greedy planner in the primitives action interface, for behaviour cloning.
+
+A policy learns faster when a planner teaches it first (imitation, then RL; issue 8's planner-guided training).
+For the demonstrations to be imitable they must be in the policy's own interface: ``GreedyPrimitivesPlanner``
+is the greedy information-gain planner (``agents.greedy``) choosing, once per env step of a primitives env
+(``action.kind: primitives``), the index of the primitive to hold for ``action.hold`` control steps, planned from
+the env's belief exactly as the velocity agent plans. ``collect`` drives a primitives env with it and keeps
+the env's raw observations (before any VecNormalize), the chosen indices and the rewards; ``save``/``load``
+keep them as ``.npz``.
+
+Seeds: demonstrations are training data, so their seeds must avoid the held-out suite (10000-10049) and the
+evaluation seeds that select models (20000 onwards by default); ``check_seeds`` says so with a clear error.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from ekfslam_gym.envs.actions import PRIMITIVES
+
+from .base import wall_scan
+from .greedy import GreedyInfoGainAgent, primitive_controls
+from .greedy.grid import mark_seen, update_walls
+from .greedy.veto import WALL_JOIN, scan_geometry, to_world
+
+HELD_OUT = range(10000, 10050)  # ekfslam_gym.evaluation.episodes.HELD_OUT_SEEDS
+PLANNERS = ("greedy",)
+
+
+class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
+    """The greedy planner acting in a primitives env: ``act`` returns the index (``np.int64``) of the primitive
+    it chooses, replanning every env step (one env step holds a primitive for ``action.hold`` >= the velocity
+    agent's ``replan_every`` control steps).
+
+    The velocity agent marks its coverage grid at every control step; here the control steps inside a macro
+    step are not observed, so the grid is marked at the poses the executed primitive predicts from the estimate
+    at the step's start (the planner's own rollout arc, the belief's dead reckoning), then at the new estimate
+    with the new wall scan. When every primitive is vetoed it turns in place towards the more open side, as the
+    velocity agent does.
+    """
+
+    name = "greedy-primitives"
+
+    def reset(self, env: gym.Env, seed: int | None = None) -> None:
+        super().reset(env, seed)
+        u = self.env
+        if u.config.action.kind != "primitives" or u.action_space != gym.spaces.Discrete(len(PRIMITIVES)):
+            raise ValueError(
+                f"the greedy-primitives planner needs an env with action.kind primitives, got {u.config.action.kind}"
+            )
+        if not np.array_equal(self.primitives, np.asarray(PRIMITIVES, dtype=float)):
+            raise ValueError("the planner's primitives must be the env's PRIMITIVES (an index names one)")
+        cfg = u.config
+        self._hold = int(cfg.action.hold)
+        # The arcs each primitive drives over one macro step, relative to its start (for marking the grid).
+        self._arcs = [
+            primitive_controls(v * cfg.robot.v_max, w * cfg.robot.omega_max, cfg.dt, self._hold,
+                               u.filter.motion_model, _noise(u))[2]
+            for v, w in self.primitives
+        ]  # fmt: skip
+        self._turn = {
+            side: PRIMITIVES.index((0.0, side)) for side in (1.0, -1.0)
+        }  # the turns in place, the way out when everything is vetoed
+        self._executed: int | None = None
+        self._start: np.ndarray | None = None
+
+    def act(self, observation: Any) -> np.int64:
+        pose = np.asarray(self.env.filter.pose, dtype=float)
+        scan = wall_scan(self.env, observation)
+        b = self._bounds
+        half_fov = 0.5 * self._fov
+        if self._executed is not None:
+            for x, y, theta in to_world(self._arcs[self._executed][1:-1], self._start):
+                mark_seen(self._seen, self._hidden, self._wall, b[0], b[1], self.cell, x, y, theta,
+                          self._max_range, half_fov)  # fmt: skip
+        update_walls(
+            self._wall, b[0], b[1], self.cell, pose[0], pose[1], pose[2], self._angles, scan,
+            self._scan_max - 1e-6, WALL_JOIN,
+        )  # fmt: skip
+        mark_seen(self._seen, self._hidden, self._wall, b[0], b[1], self.cell, pose[0], pose[1], pose[2],
+                  self._max_range, half_fov)  # fmt: skip
+        points, segments = scan_geometry(scan, self._angles, self._scan_max)
+        self._current = self._plan(pose, points, segments)
+        if self._current >= 0:
+            index = self._current
+        else:
+            left = scan[(self._angles > 0) & (self._angles < math.pi)].sum()
+            right = scan[self._angles > math.pi].sum()
+            index = self._turn[1.0 if left >= right else -1.0]
+        self._executed, self._start = index, pose
+        return np.int64(index)
+
+    def executed(self, index: int) -> None:
+        """Note that primitive ``index`` was executed instead of the planner's choice (a learner drove, the
+        planner only labels: DAgger), so the coverage grid is marked along the path actually driven and the
+        commitment bonus goes to the primitive being executed."""
+        if int(index) != self._executed:
+            self._executed = self._current = int(index)
+
+    def __repr__(self) -> str:
+        return f"GreedyPrimitivesPlanner(horizon={self.horizon})"
+
+
+def _noise(u: Any) -> Any:
+    """The motion noise the filter's motion model uses (as ``GreedyInfoGainAgent.reset`` picks it)."""
+    return {"odometry": u.config.odometry, "velocity": u.world.velocity_noise, "wheels": u.world.wheel_noise}[
+        u.filter.motion_model
+    ]
+
+
+def make_planner(name: str, **kwargs: Any) -> GreedyPrimitivesPlanner:
+    if name not in PLANNERS:
+        raise ValueError(f"unknown demonstration planner {name!r}; choose one of {list(PLANNERS)}")
+    return GreedyPrimitivesPlanner(**kwargs)
+
+
+def check_seeds(seeds: Iterable[int], eval_seeds: Iterable[int] = range(20000, 20010)) -> list[int]:
+    """``seeds`` as a list; ValueError if any is negative, in the held-out suite or among ``eval_seeds``."""
+    seeds = [int(s) for s in seeds]
+    forbidden = set(HELD_OUT) | {int(s) for s in eval_seeds}
+    bad = sorted({s for s in seeds if s < 0 or s in forbidden})
+    if bad:
+        raise ValueError(
+            f"demonstration seeds {bad[:5]}{'...' if len(bad) > 5 else ''} are negative, in the held-out suite "
+            "(10000-10049) or among the evaluation seeds; pick a training range such as 30000 onwards"
+        )
+    return seeds
+
+
+@dataclass
+class Demonstrations:
+    """(observation, action) pairs of a planner, with the episode each pair came from and its reward.
+
+    ``observations`` is an array (N, ...) for a Box observation, a dict of them for a Dict observation (raw,
+    as the env returns them); ``actions`` (N,) int64 primitive indices; ``rewards`` (N,) float64, the env's
+    reward for the step; ``episodes`` (N,) int64, the index into ``seeds`` of the pair's episode.
+    """
+
+    observations: Any
+    actions: np.ndarray
+    rewards: np.ndarray
+    episodes: np.ndarray
+    seeds: np.ndarray
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.actions)
+
+    def take(self, index: np.ndarray) -> Any:
+        """The observations at ``index`` (an array, or a dict of arrays)."""
+        if isinstance(self.observations, Mapping):
+            return {k: v[index] for k, v in self.observations.items()}
+        return self.observations[index]
+
+
+def collect(
+    env_id: str,
+    seeds: Iterable[int],
+    env_kwargs: Mapping[str, Any] | None = None,
+    *,
+    planner: str = "greedy",
+    planner_kwargs: Mapping[str, Any] | None = None,
+    eval_seeds: Iterable[int] = range(20000, 20010),
+    driver: Any = None,
+) -> Demonstrations:
+    """One episode of the planner per seed in ``env_id`` built as the trainer builds its envs
+    (``gym.make(id, **env_kwargs)``, so ``max_episode_steps`` is gym.make's limit); the env must use
+    ``action.kind: primitives``. Seeds are checked with ``check_seeds``.
+
+    With ``driver`` (an ``Agent``, e.g. the policy being cloned), the driver's actions are executed and the
+    planner only labels each visited observation with its own choice: the states the learner reaches, labelled
+    by the expert (DAgger; Ross, Gordon & Bagnell 2011). ``rewards`` are then the driven episode's."""
+    import ekfslam_gym  # noqa: F401  (registers the env ids)
+
+    seeds = check_seeds(seeds, eval_seeds)
+    if not seeds:
+        raise ValueError("no demonstration seeds")
+    qualified = env_id if ":" in env_id else f"ekfslam_gym:{env_id}"
+    env = gym.make(qualified, **dict(env_kwargs or {}))
+    agent = make_planner(planner, **dict(planner_kwargs or {}))
+    observations: list[Any] = []
+    actions, rewards, episodes = [], [], []
+    try:
+        for k, seed in enumerate(seeds):
+            observation, _ = env.reset(seed=seed)
+            agent.reset(env, seed=seed)
+            if driver is not None:
+                driver.reset(env, seed=seed)
+            while True:
+                label = agent.act(observation)
+                action = label if driver is None else np.int64(driver.act(observation))
+                agent.executed(int(action))
+                observations.append(observation)
+                actions.append(int(label))
+                episodes.append(k)
+                observation, reward, terminated, truncated, _ = env.step(action)
+                rewards.append(float(reward))
+                if terminated or truncated:
+                    break
+    finally:
+        env.close()
+    if isinstance(observations[0], Mapping):
+        stacked: Any = {key: np.stack([o[key] for o in observations]) for key in observations[0]}
+    else:
+        stacked = np.stack(observations)
+    meta = {"env_id": env_id, "env_kwargs": dict(env_kwargs or {}), "planner": planner,
+            "driver": None if driver is None else getattr(driver, "name", type(driver).__name__)}  # fmt: skip
+    return Demonstrations(stacked, np.array(actions, dtype=np.int64), np.array(rewards, dtype=np.float64),
+                          np.array(episodes, dtype=np.int64), np.array(seeds, dtype=np.int64), meta)  # fmt: skip
+
+
+def concatenate(first: Demonstrations, second: Demonstrations) -> Demonstrations:
+    """``first`` then ``second`` as one set (``second``'s episodes numbered after ``first``'s); ``first``'s meta."""
+    if isinstance(first.observations, Mapping):
+        observations: Any = {
+            k: np.concatenate([v, second.observations[k]]) for k, v in first.observations.items()
+        }
+    else:
+        observations = np.concatenate([first.observations, second.observations])
+    return Demonstrations(
+        observations, np.concatenate([first.actions, second.actions]),
+        np.concatenate([first.rewards, second.rewards]),
+        np.concatenate([first.episodes, second.episodes + len(first.seeds)]),
+        np.concatenate([first.seeds, second.seeds]), dict(first.meta),
+    )  # fmt: skip
+
+
+def save(demos: Demonstrations, path: str | Path) -> Path:
+    """Write ``demos`` as ``.npz`` (Dict observations as ``obs/<key>`` arrays, the rest as ``meta`` JSON)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if isinstance(demos.observations, Mapping):
+        obs = {f"obs/{k}": v for k, v in demos.observations.items()}
+    else:
+        obs = {"obs": demos.observations}
+    np.savez_compressed(path, actions=demos.actions, rewards=demos.rewards, episodes=demos.episodes,
+                        seeds=demos.seeds, meta=np.array(json.dumps(demos.meta)), **obs)  # fmt: skip
+    return path
+
+
+def load(path: str | Path) -> Demonstrations:
+    """Read what ``save`` wrote."""
+    with np.load(path, allow_pickle=False) as data:
+        if "obs" in data.files:
+            observations: Any = data["obs"]
+        else:
+            observations = {name[4:]: data[name] for name in data.files if name.startswith("obs/")}
+        return Demonstrations(observations, data["actions"], data["rewards"], data["episodes"], data["seeds"],
+                              json.loads(str(data["meta"])))  # fmt: skip

@@ -1,0 +1,347 @@
+"""Behaviour cloning of planner demonstrations into an SB3 PPO policy: the warm start of planner-guided training.
+
+Imitation first, then RL (issue 8): the policy is trained to choose the planner's primitive (cross-entropy on
+the Discrete action under the policy's own distribution, i.e. the negative log-likelihood ``evaluate_actions``
+gives, in shuffled minibatches over a few epochs), and optionally its value head to predict the discounted
+return the demonstrations earned, so that PPO's first advantages are not those of an untrained critic. Before
+that, the VecNormalize statistics are fitted to the demonstrations (observations, and the discounted returns
+the reward normaliser divides by), so the policy is cloned on the inputs PPO fine-tuning will feed it.
+
+``pretrain(model, env_id, entry, out)`` is what ``agents.training`` runs before ``learn()`` when the config's
+``train_settings`` hold a ``pretrain`` section (``PRETRAIN_DEFAULTS`` lists its keys); ``validate_pretrain``
+checks that section. torch and stable-baselines3 are imported only when cloning.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .demonstrations import PLANNERS, Demonstrations, check_seeds, collect, concatenate, load, save
+
+PRETRAIN_DEFAULTS: dict[str, Any] = {
+    "planner": "greedy",  # the demonstrator (agents.demonstrations.PLANNERS)
+    "episodes": 200,  # demonstration episodes, one per seed from ``seed``
+    "seed": 30000,  # first demonstration seed: a training range, clear of the held-out and evaluation seeds
+    "epochs": 10,  # passes over the demonstrations
+    "batch_size": 256,
+    "learning_rate": 1.0e-3,  # Adam's, for cloning only (PPO keeps its own optimiser)
+    "holdout": 0.1,  # fraction of the demonstration episodes held back to report accuracy on
+    "value": True,  # also fit the value head to the demonstrations' discounted (normalised) returns
+    "path": None,  # a demonstrations .npz to reuse instead of collecting (it must match env id and env_kwargs)
+    "dagger_rounds": 0,  # DAgger rounds after cloning: the clone drives, the planner labels, clone again
+    "dagger_episodes": 50,  # episodes per DAgger round, on the seeds after seed + episodes (path: those too)
+}
+DEMONSTRATIONS_FILE = "demonstrations.npz"
+BC_MODEL = "bc_model"  # the cloned policy, before any PPO update, saved with its statistics in the run folder
+
+
+def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
+    """The ``pretrain`` setting with its defaults filled in, or None when absent or false; ValueError naming
+    the key for anything else. With ``entry``, the demonstration seeds are also checked against its
+    evaluation seeds (``eval_seed`` onwards, ``eval_episodes`` of them)."""
+    if value is None or value is False:
+        return None
+    if value is True:
+        value = {}
+    if not isinstance(value, Mapping):
+        raise ValueError(
+            f"pretrain must be a mapping of {sorted(PRETRAIN_DEFAULTS)} (or absent), got {value!r}"
+        )
+    unknown = sorted(set(value) - set(PRETRAIN_DEFAULTS))
+    if unknown:
+        raise ValueError(f"unknown pretrain keys {unknown}; known: {sorted(PRETRAIN_DEFAULTS)}")
+    settings = {**PRETRAIN_DEFAULTS, **value}
+    if settings["planner"] not in PLANNERS:
+        raise ValueError(f"pretrain.planner must be one of {list(PLANNERS)}, got {settings['planner']!r}")
+    for key, low in (("episodes", 1), ("seed", 0), ("epochs", 1), ("batch_size", 1), ("dagger_rounds", 0),
+                     ("dagger_episodes", 1)):  # fmt: skip
+        if isinstance(settings[key], bool) or not isinstance(settings[key], int) or settings[key] < low:
+            raise ValueError(f"pretrain.{key} must be an integer >= {low}, got {settings[key]!r}")
+    rate = settings["learning_rate"]
+    if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not rate > 0:
+        raise ValueError(f"pretrain.learning_rate must be a positive number, got {rate!r}")
+    holdout = settings["holdout"]
+    if isinstance(holdout, bool) or not isinstance(holdout, (int, float)) or not 0 <= holdout < 1:
+        raise ValueError(f"pretrain.holdout must be a fraction in [0, 1), got {holdout!r}")
+    if not isinstance(settings["value"], bool):
+        raise ValueError(f"pretrain.value must be true or false, got {settings['value']!r}")
+    if settings["path"] is not None and not isinstance(settings["path"], str):
+        raise ValueError(f"pretrain.path must be a file name or null, got {settings['path']!r}")
+    eval_seeds = range(0)
+    if entry is not None:
+        start = int(entry.get("eval_seed", 20000))
+        eval_seeds = range(start, start + int(entry.get("eval_episodes", 10)))
+    try:
+        check_seeds(demonstration_seeds(settings, -1), eval_seeds)
+    except ValueError as error:
+        raise ValueError(f"pretrain.seed/episodes: {error}") from None
+    return settings
+
+
+def demonstration_seeds(settings: Mapping[str, Any], round_: int | None = None) -> range:
+    """The planner's seeds (``round_`` None), those of DAgger round ``round_`` (0, 1, ...), or with ``round_`` -1
+    all of them: one block of consecutive seeds from ``seed``."""
+    first, n, per = int(settings["seed"]), int(settings["episodes"]), int(settings.get("dagger_episodes", 0))
+    if round_ is None:
+        return range(first, first + n)
+    if round_ < 0:
+        return range(first, first + n + int(settings.get("dagger_rounds", 0)) * per)
+    start = first + n + round_ * per
+    return range(start, start + per)
+
+
+# ---------------------------------------------------------------------------------------------- normalisation
+def fit_normalizer(vec_normalize: Any, demos: Demonstrations) -> None:
+    """Set a VecNormalize's statistics from the demonstrations: the observation mean and variance (per key of
+    a Dict observation) and, when it normalises rewards, those of the discounted return it divides by, replayed
+    episode by episode as VecNormalize accumulates it (``returns = gamma * returns + reward``)."""
+    from stable_baselines3.common.running_mean_std import RunningMeanStd
+
+    def fitted(data: np.ndarray) -> RunningMeanStd:
+        rms = RunningMeanStd(shape=data.shape[1:])
+        rms.mean = np.mean(data, axis=0, dtype=np.float64)
+        rms.var = np.var(data, axis=0, dtype=np.float64)
+        rms.count = float(len(data))
+        return rms
+
+    if vec_normalize.norm_obs:
+        if isinstance(vec_normalize.obs_rms, dict):
+            vec_normalize.obs_rms = {key: fitted(demos.observations[key]) for key in vec_normalize.obs_rms}
+        else:
+            vec_normalize.obs_rms = fitted(demos.observations)
+    if vec_normalize.norm_reward:
+        vec_normalize.ret_rms = fitted(discounted_running_returns(demos, vec_normalize.gamma))
+
+
+def discounted_running_returns(demos: Demonstrations, gamma: float) -> np.ndarray:
+    """VecNormalize's running discounted return after each step, restarting with each episode."""
+    out = np.empty(len(demos))
+    running, episode = 0.0, None
+    for i, (reward, k) in enumerate(zip(demos.rewards, demos.episodes)):
+        running = (0.0 if k != episode else gamma * running) + reward
+        episode = k
+        out[i] = running
+    return out
+
+
+def returns_to_go(rewards: np.ndarray, episodes: np.ndarray, gamma: float) -> np.ndarray:
+    """The discounted sum of the rewards from each step to its episode's end (the value-head target)."""
+    out = np.empty(len(rewards))
+    running = 0.0
+    for i in range(len(rewards) - 1, -1, -1):
+        if i == len(rewards) - 1 or episodes[i + 1] != episodes[i]:
+            running = 0.0
+        running = rewards[i] + gamma * running
+        out[i] = running
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- cloning
+@dataclass
+class CloneReport:
+    """What cloning achieved: accuracy (the policy's most likely action is the planner's) on the pairs it was
+    trained on and on the held-back episodes (NaN when none), and the last epoch's mean losses."""
+
+    train_pairs: int
+    holdout_pairs: int
+    holdout_episodes: int
+    train_accuracy: float
+    holdout_accuracy: float
+    action_loss: float
+    value_loss: float
+    epochs: int
+    seconds: float
+
+
+def split_episodes(
+    episodes: np.ndarray, holdout: float, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """(train, held-back) pair indices: whole episodes are held back (``holdout`` of them, at least one when
+    ``holdout`` > 0 and there are two or more; pairs within one episode are too alike to test on)."""
+    ids = np.unique(episodes)
+    n_hold = 0
+    if holdout > 0 and len(ids) >= 2:
+        n_hold = min(max(1, int(round(holdout * len(ids)))), len(ids) - 1)
+    held = rng.choice(ids, size=n_hold, replace=False) if n_hold else np.array([], dtype=ids.dtype)
+    mask = np.isin(episodes, held)
+    return np.flatnonzero(~mask), np.flatnonzero(mask)
+
+
+def behaviour_clone(
+    model: Any,
+    demos: Demonstrations,
+    *,
+    epochs: int = 10,
+    batch_size: int = 256,
+    learning_rate: float = 1.0e-3,
+    holdout: float = 0.1,
+    value: bool = True,
+    seed: int = 0,
+    held: np.ndarray | None = None,
+) -> CloneReport:
+    """Train ``model.policy`` (an SB3 actor-critic on a Discrete action space) to choose the demonstrated
+    actions; the observations are normalised by the model's VecNormalize, if any (fit it first:
+    ``fit_normalizer``). With ``value``, the value head also regresses the demonstrations' discounted returns
+    (rewards normalised as the VecNormalize would, discounted with ``model.gamma``). ``held`` (bool per pair)
+    fixes the held-back pairs, else ``holdout`` of the episodes are drawn with ``seed``, which also orders the
+    minibatches; torch's global generator is left alone, so the run's own seed still drives PPO afterwards."""
+    import torch
+    from gymnasium import spaces
+    from stable_baselines3.common.utils import obs_as_tensor
+
+    if not isinstance(model.action_space, spaces.Discrete):
+        raise ValueError(f"behaviour cloning needs a Discrete action space (action.kind primitives), got "
+                         f"{model.action_space}")  # fmt: skip
+    if len(demos) == 0:
+        raise ValueError("no demonstrations to clone")
+    start = time.perf_counter()
+    policy = model.policy
+    rng = np.random.default_rng(seed)
+    normalizer = model.get_vec_normalize_env()
+    observations = demos.observations
+    rewards = demos.rewards
+    if normalizer is not None:
+        observations = normalizer.normalize_obs(observations)
+        rewards = normalizer.normalize_reward(rewards)
+    targets = returns_to_go(rewards, demos.episodes, float(model.gamma))
+    actions = demos.actions.astype(np.int64)
+    if held is None:
+        train_idx, hold_idx = split_episodes(demos.episodes, holdout, rng)
+    else:
+        train_idx, hold_idx = np.flatnonzero(~held), np.flatnonzero(held)
+
+    def take(index: np.ndarray) -> Any:
+        if isinstance(observations, Mapping):
+            return obs_as_tensor({k: v[index] for k, v in observations.items()}, policy.device)
+        return obs_as_tensor(observations[index], policy.device)
+
+    def accuracy(index: np.ndarray) -> float:
+        if len(index) == 0:
+            return float("nan")
+        with torch.no_grad():
+            chosen = policy.get_distribution(take(index)).get_actions(deterministic=True)
+        return float(np.mean(chosen.cpu().numpy().reshape(-1) == actions[index]))
+
+    optimizer = torch.optim.Adam(policy.parameters(), lr=float(learning_rate))
+    policy.set_training_mode(True)
+    action_loss = value_loss = float("nan")
+    for _ in range(int(epochs)):
+        order = rng.permutation(train_idx)
+        sums = np.zeros(2)
+        for first in range(0, len(order), int(batch_size)):
+            batch = order[first : first + int(batch_size)]
+            act = torch.as_tensor(actions[batch], device=policy.device)
+            values, log_prob, _ = policy.evaluate_actions(take(batch), act)
+            loss_a = -log_prob.mean()
+            loss = loss_a
+            loss_v = torch.zeros(())
+            if value:
+                target = torch.as_tensor(targets[batch], dtype=values.dtype, device=policy.device)
+                loss_v = torch.nn.functional.mse_loss(values.flatten(), target)
+                loss = loss + float(model.vf_coef) * loss_v
+            optimizer.zero_grad()
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(policy.parameters(), float(model.max_grad_norm))
+            optimizer.step()
+            sums += [loss_a.item() * len(batch), loss_v.item() * len(batch)]
+        action_loss, value_loss = (sums / max(len(order), 1)).tolist()
+    policy.set_training_mode(False)
+    return CloneReport(
+        train_pairs=int(len(train_idx)), holdout_pairs=int(len(hold_idx)),
+        holdout_episodes=int(len(np.unique(demos.episodes[hold_idx]))), train_accuracy=accuracy(train_idx),
+        holdout_accuracy=accuracy(hold_idx), action_loss=action_loss,
+        value_loss=value_loss if value else float("nan"), epochs=int(epochs),
+        seconds=time.perf_counter() - start,
+    )  # fmt: skip
+
+
+# ---------------------------------------------------------------------------------------------- training hook
+def demonstrations_for(
+    env_id: str, entry: Mapping[str, Any], settings: Mapping[str, Any], out: Path
+) -> Demonstrations:
+    """The run's demonstrations: ``settings["path"]`` if given (checked against the env id and env_kwargs), else
+    collected and saved in ``out`` as ``demonstrations.npz``."""
+    env_kwargs = dict(entry.get("env_kwargs") or {})
+    if settings.get("path"):
+        demos = load(settings["path"])
+        recorded = (demos.meta.get("env_id"), demos.meta.get("env_kwargs"))
+        if recorded != (env_id, env_kwargs):
+            raise ValueError(
+                f"{settings['path']} holds demonstrations of {recorded[0]} with env_kwargs {recorded[1]}, "
+                f"this run trains {env_id} with {env_kwargs}"
+            )
+        return demos
+    start = int(entry.get("eval_seed", 20000))
+    demos = collect(env_id, demonstration_seeds(settings), env_kwargs, planner=settings["planner"],
+                    eval_seeds=range(start, start + int(entry.get("eval_episodes", 10))))  # fmt: skip
+    save(demos, Path(out) / DEMONSTRATIONS_FILE)
+    return demos
+
+
+def pretrain(model: Any, env_id: str, entry: Mapping[str, Any], out: Path) -> dict[str, Any] | None:
+    """The ``pretrain`` step of a training run (no-op without the setting): demonstrations, normalisation
+    statistics fitted to them, behaviour cloning, then ``dagger_rounds`` DAgger rounds (the clone drives
+    ``dagger_episodes`` episodes, the planner labels the observations it reaches, the clone is trained again on
+    everything; Ross, Gordon & Bagnell 2011). Writes ``pretrain.json`` (settings, one ``CloneReport`` per
+    round, and per DAgger round the fraction of the clone's own decisions that matched the planner's) and the
+    cloned policy as ``bc_model.zip`` (with its statistics and the run's config) in ``out``; with DAgger, the
+    aggregated pairs as ``dagger.npz``."""
+    settings = validate_pretrain(entry.get("pretrain"), entry)
+    if settings is None:
+        return None
+    from .ppo import PPOAgent
+    from .training import save_with_stats
+
+    out = Path(out)
+    start = time.perf_counter()
+    demos = demonstrations_for(env_id, entry, settings, out)
+    collected = time.perf_counter() - start
+    reused = set(demos.seeds.tolist()) & set(demonstration_seeds(settings, -1)[settings["episodes"] :])
+    if reused:
+        raise ValueError(
+            f"DAgger seeds {sorted(reused)[:5]} are among the demonstrations' own; move pretrain.seed"
+        )
+    rng = np.random.default_rng(settings["seed"])
+    held = np.isin(
+        demos.episodes, demos.episodes[split_episodes(demos.episodes, settings["holdout"], rng)[1]]
+    )
+    normalizer = model.get_vec_normalize_env()
+
+    def clone(epochs: int) -> CloneReport:
+        if normalizer is not None:
+            fit_normalizer(normalizer, demos)
+        return behaviour_clone(model, demos, epochs=epochs, batch_size=settings["batch_size"],
+                               learning_rate=settings["learning_rate"], value=settings["value"],
+                               seed=settings["seed"], held=held)  # fmt: skip
+
+    reports = [clone(settings["epochs"])]
+    agreement = []
+    eval_start = int(entry.get("eval_seed", 20000))
+    for round_ in range(settings["dagger_rounds"]):
+        tick = time.perf_counter()
+        more = collect(env_id, demonstration_seeds(settings, round_), dict(entry.get("env_kwargs") or {}),
+                       planner=settings["planner"], driver=PPOAgent(model=model, vecnormalize=normalizer),
+                       eval_seeds=range(eval_start, eval_start + int(entry.get("eval_episodes", 10))))  # fmt: skip
+        collected += time.perf_counter() - tick
+        # The clone drove deterministically, so its accuracy on what it reached is its agreement with the planner.
+        on_policy = behaviour_clone(model, more, epochs=0, held=np.ones(len(more), dtype=bool))
+        agreement.append(on_policy.holdout_accuracy)
+        split = split_episodes(more.episodes, settings["holdout"], rng)[1]
+        held = np.concatenate([held, np.isin(more.episodes, more.episodes[split])])
+        demos = concatenate(demos, more)
+        reports.append(clone(settings["epochs"]))
+    if settings["dagger_rounds"]:
+        save(demos, out / "dagger.npz")
+    save_with_stats(model, out / BC_MODEL, out)
+    record = {"settings": dict(settings), "pairs": len(demos), "episodes": int(len(demos.seeds)),
+              "demonstration_seconds": collected, "clone": asdict(reports[-1]),
+              "rounds": [asdict(r) for r in reports], "dagger_agreement": agreement}  # fmt: skip
+    (out / "pretrain.json").write_text(json.dumps(record, indent=2))
+    return record

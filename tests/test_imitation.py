@@ -1,0 +1,228 @@
+"""Planner-guided training: the greedy planner's demonstrations in the primitives interface, behaviour cloning
+into an SB3 policy, and the ``pretrain`` switch of train.py's config. Never asserts learning quality on the env:
+cloning is checked on a synthetic task whose answer is known."""
+
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+pytest.importorskip("stable_baselines3")
+
+from agents import demonstrations as demo_mod  # noqa: E402
+from agents.demonstrations import Demonstrations, GreedyPrimitivesPlanner, check_seeds, collect  # noqa: E402
+from agents.imitation import (  # noqa: E402
+    behaviour_clone,
+    discounted_running_returns,
+    fit_normalizer,
+    returns_to_go,
+    validate_pretrain,
+)
+from ekfslam_gym.envs.actions import PRIMITIVES  # noqa: E402
+
+PRIMITIVE_KWARGS = {"action": {"kind": "primitives", "hold": 10}, "max_episode_steps": 6}
+
+
+def test_demonstrations_have_the_env_shapes_and_valid_planner_actions(tmp_path):
+    demos = collect("EKFSLAM-v0", [30000, 30001], PRIMITIVE_KWARGS)
+    env = gym.make("ekfslam_gym:EKFSLAM-v0", **PRIMITIVE_KWARGS)
+    space = env.observation_space
+    env.close()
+    assert len(demos) == 12  # two episodes of six decisions
+    assert demos.observations.shape == (12, *space.shape) and demos.observations.dtype == space.dtype
+    assert all(space.contains(o) for o in demos.observations)  # raw observations, not normalised
+    assert demos.actions.dtype == np.int64 and np.all(
+        (0 <= demos.actions) & (demos.actions < len(PRIMITIVES))
+    )
+    assert demos.rewards.dtype == np.float64 and np.all(np.isfinite(demos.rewards))
+    assert list(demos.episodes) == [0] * 6 + [1] * 6 and list(demos.seeds) == [30000, 30001]
+    loaded = demo_mod.load(demo_mod.save(demos, tmp_path / "d.npz"))
+    for name in ("observations", "actions", "rewards", "episodes", "seeds"):
+        assert np.array_equal(getattr(loaded, name), getattr(demos, name)), name
+    assert loaded.meta == {
+        "env_id": "EKFSLAM-v0",
+        "env_kwargs": PRIMITIVE_KWARGS,
+        "planner": "greedy",
+        "driver": None,
+    }
+    # Deterministic: the same seeds give the same demonstrations.
+    again = collect("EKFSLAM-v0", [30000, 30001], PRIMITIVE_KWARGS)
+    assert np.array_equal(again.actions, demos.actions) and np.array_equal(
+        again.observations, demos.observations
+    )
+
+
+def test_planner_choices_are_the_greedy_agents_plan_from_the_belief():
+    env = gym.make("ekfslam_gym:EKFSLAM-v0", **PRIMITIVE_KWARGS)
+    planner = GreedyPrimitivesPlanner()
+    observation, _ = env.reset(seed=30002)
+    planner.reset(env, seed=30002)
+    action = planner.act(observation)
+    scores = planner.last_scores
+    assert isinstance(action, np.int64) and np.isfinite(scores).any()
+    assert action == int(np.argmax(scores))  # the best-scoring primitive, as the velocity agent picks
+    env.close()
+    velocity = gym.make("ekfslam_gym:EKFSLAM-v0")
+    velocity.reset(seed=0)
+    with pytest.raises(ValueError, match="primitives"):
+        GreedyPrimitivesPlanner().reset(velocity, seed=0)
+    velocity.close()
+
+
+class TurnInPlace:
+    """A driver that only turns in place (primitive 7): the robot stays where it started."""
+
+    name = "turn"
+
+    def reset(self, env, seed=None):
+        pass
+
+    def act(self, observation):
+        return np.int64(PRIMITIVES.index((0.0, 1.0)))
+
+
+def test_dagger_collection_executes_the_driver_and_records_the_planners_labels():
+    demos = collect("EKFSLAM-v0", [30003], PRIMITIVE_KWARGS, driver=TurnInPlace())
+    planner = collect("EKFSLAM-v0", [30003], PRIMITIVE_KWARGS)
+    assert demos.meta["driver"] == "turn" and len(demos) == 6
+    position = demos.observations[:, :2]  # the estimated position: the driver never moved the robot
+    assert np.ptp(position, axis=0).max() < 0.02 < np.ptp(planner.observations[:, :2], axis=0).max()
+    assert demos.actions[0] == planner.actions[0]  # the same first state, the same label
+    assert np.any(demos.actions != PRIMITIVES.index((0.0, 1.0)))  # labels are the planner's, not the driver's
+
+
+def test_demonstration_seeds_avoid_the_held_out_and_evaluation_seeds():
+    assert check_seeds(range(30000, 30003)) == [30000, 30001, 30002]
+    for bad in ([10000], [10049], [20005], [-1]):
+        with pytest.raises(ValueError, match="held-out"):
+            check_seeds(bad)
+
+
+def test_discounted_returns_known_answers():
+    demos = Demonstrations(np.zeros((5, 1)), np.zeros(5, dtype=np.int64), np.array([1.0, 2.0, 3.0, 4.0, 5.0]),
+                           np.array([0, 0, 0, 1, 1]), np.array([0, 1]))  # fmt: skip
+    # VecNormalize's running return, restarted at each episode: 1, 0.5 + 2, 1.25 + 3 | 4, 2 + 5.
+    assert np.allclose(discounted_running_returns(demos, 0.5), [1.0, 2.5, 4.25, 4.0, 7.0])
+    # Returns to go: 1 + 0.5 * 2 + 0.25 * 3, 2 + 1.5, 3 | 4 + 2.5, 5.
+    assert np.allclose(returns_to_go(demos.rewards, demos.episodes, 0.5), [2.75, 3.5, 3.0, 6.5, 5.0])
+
+
+class LabelEnv(gym.Env):
+    """A 4-d Box observation and Discrete(3) actions: the spaces a cloned policy needs, nothing more."""
+
+    observation_space = gym.spaces.Box(-np.inf, np.inf, (4,), np.float32)
+    action_space = gym.spaces.Discrete(3)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(4, dtype=np.float32), {}
+
+    def step(self, action):
+        return np.zeros(4, dtype=np.float32), 0.0, True, False, {}
+
+
+def synthetic(n_episodes=20, length=100, seed=0):
+    """Observations N(3, 2^2) per component, action = argmax of a fixed linear map of the centred observation:
+    a deterministic function of the observation, so a policy can clone it almost perfectly."""
+    rng = np.random.default_rng(seed)
+    n = n_episodes * length
+    obs = (3.0 + 2.0 * rng.standard_normal((n, 4))).astype(np.float32)
+    weights = np.array([[1.0, -1.0, 0.5, 0.0], [-0.5, 1.0, 1.0, -1.0], [0.0, 0.3, -1.0, 1.0]])
+    actions = np.argmax((obs - 3.0) @ weights.T, axis=1).astype(np.int64)
+    return Demonstrations(obs, actions, rng.standard_normal(n), np.repeat(np.arange(n_episodes), length),
+                          np.arange(n_episodes))  # fmt: skip
+
+
+def test_behaviour_cloning_learns_a_deterministic_labelling():
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    torch.set_num_threads(1)
+    demos = synthetic()
+    venv = VecNormalize(DummyVecEnv([LabelEnv]), gamma=0.9)
+    model = PPO("MlpPolicy", venv, seed=0, n_steps=64, batch_size=64, gamma=0.9)
+    fit_normalizer(venv, demos)
+    assert np.allclose(venv.obs_rms.mean, demos.observations.mean(axis=0), atol=1e-5)
+    assert np.allclose(venv.obs_rms.var, demos.observations.var(axis=0), rtol=1e-4)
+    assert venv.obs_rms.count == len(demos)
+    assert np.isclose(venv.ret_rms.var, np.var(discounted_running_returns(demos, 0.9)))
+    before = behaviour_clone(model, demos, epochs=0, seed=0)
+    report = behaviour_clone(model, demos, epochs=15, batch_size=128, learning_rate=3e-3, seed=0)
+    assert report.holdout_episodes == 2 and report.holdout_pairs == 200 and report.train_pairs == 1800
+    assert before.holdout_accuracy < 0.6  # an untrained policy: about chance
+    assert report.train_accuracy > 0.9 and report.holdout_accuracy > 0.9  # ~0.97-0.99 when this was written
+    assert np.isfinite(report.value_loss) and report.action_loss < 0.3
+
+
+def test_pretrain_setting_validates():
+    assert validate_pretrain(None) is None and validate_pretrain(False) is None
+    settings = validate_pretrain({"episodes": 5})
+    assert settings["episodes"] == 5 and settings["planner"] == "greedy" and settings["seed"] == 30000
+    for bad, match in (({"episode": 5}, "unknown pretrain keys"), ({"planner": "lawnmower"}, "planner"),
+                       ({"epochs": 0}, "epochs"), ({"episodes": 2.5}, "episodes"), ({"holdout": 1.0}, "holdout"),
+                       ({"learning_rate": -1}, "learning_rate"), ({"value": "yes"}, "value"),
+                       ({"seed": 9990, "episodes": 20}, "held-out"), ("greedy", "mapping"),
+                       ({"seed": 9900, "episodes": 50, "dagger_rounds": 1, "dagger_episodes": 60}, "held-out"),
+                       ({"dagger_rounds": -1}, "dagger_rounds")):  # fmt: skip
+        with pytest.raises(ValueError, match=match):
+            validate_pretrain(bad)
+    with pytest.raises(ValueError, match="evaluation"):
+        validate_pretrain({"seed": 500, "episodes": 10}, {"eval_seed": 505, "eval_episodes": 10})
+
+
+def test_train_settings_switch_is_checked_and_absent_means_none(tmp_path):
+    import train
+
+    assert train.load_entry(train.Path("configs/ppo_primitives.yaml"), "EKFSLAM-v0")["pretrain"] is None
+    for env_id in ("EKFSLAM-v0", "EKFSLAM-Loop-v0"):
+        entry = train.load_entry(train.Path("configs/ppo_primitives_bc.yaml"), env_id)
+        assert (
+            entry["pretrain"]["planner"] == "greedy" and entry["env_kwargs"]["action"]["kind"] == "primitives"
+        )
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("EKFSLAM-v0: {n_steps: 64}\ntrain_settings: {EKFSLAM-v0: {pretrain: {epoch: 3}}}\n")
+    with pytest.raises(SystemExit, match="unknown pretrain keys"):
+        train.load_entry(bad, "EKFSLAM-v0")
+    bad.write_text("EKFSLAM-v0: {n_steps: 64, pretrain: {epochs: 3}}\n")
+    with pytest.raises(SystemExit, match="train_settings"):
+        train.load_entry(bad, "EKFSLAM-v0")
+
+
+def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
+    import train
+
+    out = tmp_path / "run"
+    args = ["--config", "configs/ppo_primitives_bc.yaml", "--timesteps", "64", "--out", str(out), "--seed", "0",
+            "--no-progress", "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1",
+            "eval_freq=0", "checkpoint_freq=0", "pretrain={episodes: 2, epochs: 2}",
+            "env_kwargs={action: {kind: primitives, hold: 10}, max_episode_steps: 8}"]  # fmt: skip
+    train.main(args)
+    for name in ("model.zip", "model_vecnormalize.pkl", "bc_model.zip", "bc_model_vecnormalize.pkl",
+                 "demonstrations.npz", "pretrain.json"):  # fmt: skip
+        assert (out / name).is_file(), name
+    record = json.loads((out / "pretrain.json").read_text())
+    assert record["pairs"] == 16 and record["clone"]["holdout_episodes"] == 1
+    saved = train.read_run(out)[2]["pretrain"]
+    assert saved["episodes"] == 2 and saved["epochs"] == 2 and saved["seed"] == 30000  # defaults recorded too
+    demos = demo_mod.load(out / "demonstrations.npz")
+    assert demos.meta["env_kwargs"]["max_episode_steps"] == 8
+
+    (out / "pretrain.json").unlink()
+    train.main(["--resume", str(out), "--timesteps", "96", "--no-progress"])
+    assert not (out / "pretrain.json").exists()  # resuming continues PPO, it does not clone again
+
+    # Reusing saved demonstrations (they must be of the run's env settings), and one DAgger round.
+    path = out / "demonstrations.npz"
+    reuse = [*args[:5], str(tmp_path / "reuse"), *args[6:-2],
+             f"pretrain={{path: {path}, epochs: 2, dagger_rounds: 1, dagger_episodes: 1}}", args[-1]]  # fmt: skip
+    train.main(reuse)
+    record = json.loads((tmp_path / "reuse" / "pretrain.json").read_text())
+    assert record["pairs"] == 24 and record["episodes"] == 3 and len(record["rounds"]) == 2
+    assert len(record["dagger_agreement"]) == 1 and 0 <= record["dagger_agreement"][0] <= 1
+    assert not (tmp_path / "reuse" / "demonstrations.npz").exists()
+    assert demo_mod.load(tmp_path / "reuse" / "dagger.npz").seeds.tolist() == [30000, 30001, 30200]
+    mismatch = [*reuse[:-1], "env_kwargs={action: {kind: primitives, hold: 5}, max_episode_steps: 8}"]
+    with pytest.raises(ValueError, match="env_kwargs"):
+        train.main(mismatch)
