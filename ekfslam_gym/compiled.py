@@ -48,6 +48,12 @@ KERNELS: dict[str, tuple[str, str, str]] = {
         f"Tuple((f8, i8, i8, i8))({_F8_1}, {_F8_2}, {_F8_2}, b1[::1], {_F8_2}, {_F8_2}, f8, b1, b1, b1, i8, i8, "
         f"{_F8_1}, {_F8_2}, f8[:, :, ::1], i8[::1], i8, {_F8_1}, f8, i8, i8, i8[::1], i8[::1], b1[::1], i8[::1])",
     ),
+    "predict_correct": (
+        "ekfslam_gym.filter.kernels",
+        "predict_correct",
+        f"Tuple((f8, i8, f8, i8, i8))({_F8_1}, {_F8_2}, {_F8_2}, b1[::1], i8, {_F8_1}, f8, f8, {_F8_2}, b1, "
+        f"{_F8_1}, b1, {_F8_2}, i8[::1], {_F8_2}, {_F8_2}, f8, b1, b1, i8, i8, {_F8_2}, f8[:, :, ::1], i8[::1])",
+    ),
     "min_wall_distance": ("ekfslam_gym.sim.geometry", "min_wall_distance", f"{_F8_1}({_F8_2}, {_F8_2})"),
     "visible_landmarks": (
         "ekfslam_gym.sim.geometry",

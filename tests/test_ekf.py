@@ -269,13 +269,14 @@ def test_loss_of_definiteness_is_reported_as_divergence():
         ekf.correct([0], [[2.0, 0.1]])
 
 
+@pytest.mark.parametrize("resync_every", [1000, 7])  # 7: resyncs fall between prediction and correction
 @pytest.mark.parametrize("variant", ["ekf", "fej", "iekf"])
-def test_update_is_predict_then_correct_bitwise(variant):
+def test_update_is_predict_then_correct_bitwise(variant, resync_every):
     rng = np.random.default_rng(5)
     landmarks = ring_landmarks(10)
     drive = loop_drive(rng, 80, landmarks, CONTROL_COV, MEASUREMENT_COV)
-    one = make_filter(10, variant=variant, initial_pose=drive.true_poses[0])
-    two = make_filter(10, variant=variant, initial_pose=drive.true_poses[0])
+    one = make_filter(10, variant=variant, initial_pose=drive.true_poses[0], resync_every=resync_every)
+    two = make_filter(10, variant=variant, initial_pose=drive.true_poses[0], resync_every=resync_every)
     for control, (ids, z) in zip(drive.controls, drive.readings):
         ids = np.ascontiguousarray(ids, dtype=np.int64)
         z = np.ascontiguousarray(z, dtype=np.float64).reshape(-1, 2)

@@ -395,23 +395,23 @@ class EKFSLAM:
         ):
             raise TypeError("update() takes the simulator's arrays as they are; use predict() and correct()")
         self._control[:width] = control
-        delta, status = compiled.predict(
-            self._mean, self._cov, self._P, self._model_code, self._control, self.dt, self.wheel_base,
-            control_cov, True, self._tracking, self._prior_pose, self._fej, self._G_used,
+        if ids.shape[0] > self._H_slots.shape[0]:
+            self._H_used = np.zeros((2 * ids.shape[0], 2, 5))
+            self._H_slots = np.zeros(2 * ids.shape[0], dtype=np.int64)
+        if not self._tracking or (self.resync_every and self._calls_since_resync + 1 >= self.resync_every):
+            # a resync falls between the two (or tracking starts): the calls one at a time, as the library's
+            return self.predict(control, control_cov=control_cov) + self.correct(ids, readings)
+        delta, status, change, correction_status, self._n_used = compiled.predict_correct(
+            self._mean, self._cov, self._P, self._observed, self._model_code, self._control, self.dt,
+            self.wheel_base, control_cov, True, self._prior_pose, self._fej, self._G_used, ids, readings,
+            self.measurement_noise, self.min_range, self.init_mode == "course", self.update_mode == "sequential",
+            self._variant_code, self.iterations, self._first, self._H_used, self._H_slots,
         )  # fmt: skip
         if status == codes.BAD_INPUT:
             raise ValueError(f"control and its noise must be finite, got {control!r}")
         self._after_call(delta)
-        if ids.shape[0] > self._H_slots.shape[0]:
-            self._H_used = np.zeros((2 * ids.shape[0], 2, 5))
-            self._H_slots = np.zeros(2 * ids.shape[0], dtype=np.int64)
-        change, status, self._n_used = compiled.correct(
-            self._mean, self._cov, self._P, self._observed, ids, readings, self.measurement_noise,
-            self.min_range, self.init_mode == "course", self.update_mode == "sequential", self._tracking,
-            self._variant_code, self.iterations, self._prior_pose, self._first, self._H_used, self._H_slots,
-        )  # fmt: skip
-        if status != codes.OK:
-            self._raise_correction_status(status, ids)
+        if correction_status != codes.OK:
+            self._raise_correction_status(correction_status, ids)
         self._after_call(change)
         return delta + change
 

@@ -570,3 +570,24 @@ def correct(
             delta += _initialise_inverse(mean, cov, P, ids[i], readings[i], Q, track, fej, prior_pose, first)
             observed[ids[i]] = True
     return delta, OK, n_use
+
+
+@njit(cache=True)
+def predict_correct(
+    mean, cov, P, observed, model, control, dt, wheel_base, control_cov, track, prior_pose, fej, G_used, ids,
+    readings, Q, min_range, course_init, sequential, variant, iterations, first, H_used, H_slots,
+):  # fmt: skip
+    """``predict`` with noise in control space, then ``correct``, in one call: the env's every step, where a
+    call's arguments cost more than a small prediction. Returns (prediction's change of log det, its status,
+    correction's change, its status, readings used); the correction is skipped unless the prediction is OK.
+    ``track`` applies to both, so the caller must not need a resync between them."""
+    predicted, status = predict(
+        mean, cov, P, model, control, dt, wheel_base, control_cov, True, track, prior_pose, fej, G_used
+    )
+    if status != OK:
+        return predicted, status, 0.0, OK, 0
+    corrected, corrected_status, used = correct(
+        mean, cov, P, observed, ids, readings, Q, min_range, course_init, sequential, track, variant, iterations,
+        prior_pose, first, H_used, H_slots,
+    )  # fmt: skip
+    return predicted, status, corrected, corrected_status, used
