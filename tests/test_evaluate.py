@@ -125,3 +125,18 @@ def test_smoother_option_reports_the_smoothed_episode_beside_the_filter(capsys):
     metrics = out["metrics"]
     assert {"smoother_ate", "smoother_landmark_rmse", "ate", "landmark_rmse"} <= set(metrics)
     assert metrics["smoother_ate"]["mean"] < metrics["ate"]["mean"]
+
+
+def test_env_kwargs_go_on_top_of_the_training_record_section_by_section():
+    from ekfslam_gym.cli.common import merge_env_kwargs
+
+    trained = {"filter": {"motion_model": "odometry", "pose_prior": 1e-6}, "action": {"kind": "primitives"}}
+    merged = merge_env_kwargs(trained, {"filter": {"variant": "fej"}, "max_episode_steps": 30})
+    assert merged == {
+        "filter": {"motion_model": "odometry", "pose_prior": 1e-6, "variant": "fej"},
+        "action": {"kind": "primitives"},
+        "max_episode_steps": 30,
+    }
+    assert trained["filter"] == {"motion_model": "odometry", "pose_prior": 1e-6}  # the record is left alone
+    assert merge_env_kwargs(None, None) == {}
+    assert merge_env_kwargs({"filter": {"variant": "ekf"}}, {"filter": None}) == {"filter": None}

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Mapping
+from typing import Any
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -20,3 +22,19 @@ def parse_seeds(text: str) -> list[int]:
     if not seeds:
         raise argparse.ArgumentTypeError(f"no seeds in {text!r}")
     return seeds
+
+
+def merge_env_kwargs(
+    trained: Mapping[str, Any] | None, overrides: Mapping[str, Any] | None
+) -> dict[str, Any]:
+    """A trained policy's recorded env settings with command-line ``--env-kwargs`` on top, section by section:
+    ``{"filter": {"variant": "fej"}}`` changes the variant and keeps the rest of the record's ``filter``."""
+    merged: dict[str, Any] = {
+        key: dict(v) if isinstance(v, Mapping) else v for key, v in (trained or {}).items()
+    }
+    for key, value in (overrides or {}).items():
+        if isinstance(value, Mapping) and isinstance(merged.get(key), Mapping):
+            merged[key] = {**merged[key], **value}
+        else:
+            merged[key] = value
+    return merged

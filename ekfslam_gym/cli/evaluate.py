@@ -34,7 +34,7 @@ from ..evaluation.episodes import (
     evaluate_agent,
 )
 from ..evaluation.report import json_safe, markdown_table, plot_results, text_summary
-from .common import parse_seeds
+from .common import merge_env_kwargs, parse_seeds
 
 
 def _build_parser() -> argparse.ArgumentParser:
@@ -140,11 +140,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                     file=sys.stderr,
                 )
             if trained_kwargs is not None:
-                evaluated = {**trained_kwargs, **(args.env_kwargs or {})}
+                evaluated = merge_env_kwargs(trained_kwargs, args.env_kwargs)
                 if evaluated != dict(trained_kwargs):
                     print(
                         f"warning: {agent!r} was trained with env_kwargs {trained_kwargs}, evaluated with "
-                        f"{evaluated} (--env-kwargs goes on top of the training settings)",
+                        f"{evaluated} (--env-kwargs goes on top of the training settings, section by section)",
                         file=sys.stderr,
                     )
 
@@ -154,8 +154,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         for k, agent in enumerate(agent_list):
             tag = label if len(agent_list) == 1 else f"{label}{k}"
             # A trained policy runs on the env settings it was trained with (its action interface, limits,
-            # ...), read from the record beside the model; --env-kwargs goes on top, for every agent.
-            env_kwargs = {**(getattr(agent, "trained_env_kwargs", None) or {}), **(args.env_kwargs or {})}
+            # ...), read from the record beside the model; --env-kwargs goes on top, section by section, for every agent.
+            env_kwargs = merge_env_kwargs(getattr(agent, "trained_env_kwargs", None), args.env_kwargs)
             rows += evaluate_agent(
                 agent, args.env_id, args.seeds, env_kwargs, max_episode_steps=args.max_episode_steps,
                 gif_dir=args.gif, gif_stride=args.gif_stride, gif_scale=args.gif_scale, label=tag,
