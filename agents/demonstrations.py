@@ -25,13 +25,13 @@ import gymnasium as gym
 import numpy as np
 
 from ekfslam_gym.envs.actions import PRIMITIVES
+from ekfslam_gym.evaluation.episodes import HELD_OUT_SEEDS
 
 from .base import wall_scan
 from .greedy import GreedyInfoGainAgent, primitive_controls
 from .greedy.grid import mark_seen, update_walls
 from .greedy.veto import WALL_JOIN, scan_geometry, to_world
 
-HELD_OUT = range(10000, 10050)  # ekfslam_gym.evaluation.episodes.HELD_OUT_SEEDS
 PLANNERS = ("greedy",)
 
 
@@ -63,7 +63,7 @@ class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
         # The arcs each primitive drives over one macro step, relative to its start (for marking the grid).
         self._arcs = [
             primitive_controls(v * cfg.robot.v_max, w * cfg.robot.omega_max, cfg.dt, self._hold,
-                               u.filter.motion_model, _noise(u))[2]
+                               u.filter.motion_model, self._motion_noise)[2]
             for v, w in self.primitives
         ]  # fmt: skip
         self._turn = {
@@ -109,13 +109,6 @@ class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
         return f"GreedyPrimitivesPlanner(horizon={self.horizon})"
 
 
-def _noise(u: Any) -> Any:
-    """The motion noise the filter's motion model uses (as ``GreedyInfoGainAgent.reset`` picks it)."""
-    return {"odometry": u.config.odometry, "velocity": u.world.velocity_noise, "wheels": u.world.wheel_noise}[
-        u.filter.motion_model
-    ]
-
-
 def make_planner(name: str, **kwargs: Any) -> GreedyPrimitivesPlanner:
     if name not in PLANNERS:
         raise ValueError(f"unknown demonstration planner {name!r}; choose one of {list(PLANNERS)}")
@@ -125,7 +118,7 @@ def make_planner(name: str, **kwargs: Any) -> GreedyPrimitivesPlanner:
 def check_seeds(seeds: Iterable[int], eval_seeds: Iterable[int] = range(20000, 20010)) -> list[int]:
     """``seeds`` as a list; ValueError if any is negative, in the held-out suite or among ``eval_seeds``."""
     seeds = [int(s) for s in seeds]
-    forbidden = set(HELD_OUT) | {int(s) for s in eval_seeds}
+    forbidden = set(HELD_OUT_SEEDS) | {int(s) for s in eval_seeds}
     bad = sorted({s for s in seeds if s < 0 or s in forbidden})
     if bad:
         raise ValueError(

@@ -82,9 +82,10 @@ class GreedyInfoGainAgent(Agent):
         self._scan_max = sensor.scan_max_range
         self._angles = beam_angles(sensor.n_beams)
         self._safe = cfg.robot.radius + self.clearance
-        noise = {"odometry": cfg.odometry, "velocity": u.world.velocity_noise, "wheels": u.world.wheel_noise}[
-            ekf.motion_model
-        ]
+        # the noise model of the filter's odometry, which the rollouts predict with
+        self._motion_noise = noise = {
+            "odometry": cfg.odometry, "velocity": u.world.velocity_noise, "wheels": u.world.wheel_noise
+        }[ekf.motion_model]  # fmt: skip
         self._plans = []
         for v, w in self.primitives:
             controls, covs, rel = primitive_controls(

@@ -256,27 +256,21 @@ class EKFSLAMEnv(gym.Env):
 
         readings = self._world.sense(rng)
         if self._unknown:
-            read = self._correct_unknown(readings)
-            readings = self._last_readings  # what the filter used, ids their slots
+            read = self._correct_unknown(readings)  # keeps what the filter used as _last_readings
         else:
             ekf.correct(readings.ids, readings.z)
+            read = readings.ids
+            self._last_readings = readings
         self._log_det = self._prev_log_det = ekf.log_det
         self._belief = self._belief_views()
-        mean, cov, observed, _ = self._belief
+        cov = self._belief[1]
         weights = self.config.reward
         self._trace = float(np.trace(cov)) if weights.a_opt else 0.0
         self._lambda_max = self._largest_eigenvalue(cov) if weights.e_opt else 0.0
-        self._last_readings = readings
         self._odometry = np.zeros(2 if f.motion_model == "velocity" else 3)
         self._odometry_cov = np.zeros((self._odometry.size, self._odometry.size))
         self._newly_covered = self._mark_and_trail()
-        if self._unknown:
-            nees, rmse, _, self._worst_variance, seen, _, _ = self._unknown_metrics(read)
-        else:
-            nees, rmse, _, self._worst_variance, seen, _, _ = compiled.step_metrics(
-                mean, cov, observed, self._world.pose_tuple, self._true_landmarks, readings.ids,
-                self._last_seen, self._errors, self._traces, self._t, cfg.loop_gap,
-            )  # fmt: skip
+        nees, rmse, _, self._worst_variance, seen, _, _ = self._step_metrics(read)
         info = self._info({"info_gain": 0.0}, nees, rmse, seen, 0.0, 0.0)
         if self.render_mode == "human":
             self.render()
@@ -362,26 +356,18 @@ class EKFSLAMEnv(gym.Env):
                 read = self._correct_unknown(readings)
             else:
                 ekf.update(odometry.u, odometry.cov, readings.ids, readings.z)
+                read = readings.ids
             failed = not math.isfinite(ekf.log_det)
         except FilterDivergedError:
             failed = True
         if failed:
             return None, 0.0, True, math.nan, math.nan, 0, 0.0, 0.0, True
 
-        mean, cov, observed, _ = self._belief
         self._prev_log_det, self._log_det = self._log_det, ekf.log_det
         self._newly_covered = self._mark_and_trail()
         terms = self._rewards()
         reward = sum(terms.values(), 0.0)
-        if unknown:
-            nees, rmse, closures, self._worst_variance, seen, truth_gain, belief_gain = self._unknown_metrics(
-                read
-            )
-        else:
-            nees, rmse, closures, self._worst_variance, seen, truth_gain, belief_gain = compiled.step_metrics(
-                mean, cov, observed, world.pose_tuple, self._true_landmarks, readings.ids, self._last_seen,
-                self._errors, self._traces, self._t, self.config.loop_gap,
-            )  # fmt: skip
+        nees, rmse, closures, self._worst_variance, seen, truth_gain, belief_gain = self._step_metrics(read)
         self._loop_closures += closures
         return terms, reward, self._is_terminated(), nees, rmse, seen, truth_gain, belief_gain, False
 
@@ -415,13 +401,18 @@ class EKFSLAMEnv(gym.Env):
         self._last_readings = Readings(read, read_z)
         return read
 
-    def _unknown_metrics(self, read_slots: np.ndarray):
-        """``compiled.step_metrics`` with each slot scored against the true landmark it holds (slots of clutter
-        and free slots count as unseen, so the done_std end waits for every slot to hold a true landmark)."""
-        mean, cov, _, _ = self._belief
+    def _step_metrics(self, read: np.ndarray):
+        """``compiled.step_metrics`` of the step, ``read`` the slots the filter used. With known association
+        slot j is landmark j; otherwise each slot is scored against the true landmark it holds (slots of
+        clutter and free slots count as unseen, so the done_std end waits for every slot to hold one)."""
+        mean, cov, observed, _ = self._belief
+        if self._unknown:
+            observed, landmarks = self._slot_valid, self._slot_landmarks
+        else:
+            landmarks = self._true_landmarks
         return compiled.step_metrics(
-            mean, cov, self._slot_valid, self._world.pose_tuple, self._slot_landmarks, read_slots,
-            self._last_seen, self._errors, self._traces, self._t, self.config.loop_gap,
+            mean, cov, observed, self._world.pose_tuple, landmarks, read, self._last_seen, self._errors,
+            self._traces, self._t, self.config.loop_gap,
         )  # fmt: skip
 
     def _failed_step(self, inner: list | None = None):

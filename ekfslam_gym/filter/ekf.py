@@ -344,14 +344,8 @@ class EKFSLAM:
         readings = np.asarray(readings, dtype=float).reshape(-1, 2) if len(ids) else np.empty((0, 2))
         if readings.shape[0] != ids.shape[0]:
             raise ValueError(f"{ids.shape[0]} ids but {readings.shape[0]} readings")
-        Q = (
-            self.measurement_noise
-            if measurement_cov is None
-            else _as_covariance(measurement_cov, 2, "measurement_cov")
-        )
-        if ids.shape[0] > self._H_slots.shape[0]:
-            self._H_used = np.zeros((2 * ids.shape[0], 2, 5))
-            self._H_slots = np.zeros(2 * ids.shape[0], dtype=np.int64)
+        Q = self._noise(measurement_cov)
+        self._reserve_jacobians(ids.shape[0])
         delta, status, used = compiled.correct(
             self._mean, self._cov, self._P, self._observed, ids, np.ascontiguousarray(readings), Q,
             self.min_range, self.init_mode == "course", self.update_mode == "sequential", self._tracking,
@@ -362,6 +356,12 @@ class EKFSLAM:
             self._raise_correction_status(status, ids)
         self._after_call(delta)
         return delta
+
+    def _reserve_jacobians(self, readings: int) -> None:
+        """Room for the Jacobians of ``readings`` readings (``last_jacobians``), grown when a step has more."""
+        if readings > self._H_slots.shape[0]:
+            self._H_used = np.zeros((2 * readings, 2, 5))
+            self._H_slots = np.zeros(2 * readings, dtype=np.int64)
 
     def _raise_correction_status(self, status: int, ids: np.ndarray) -> None:
         if status == codes.BAD_ID:
@@ -395,9 +395,7 @@ class EKFSLAM:
         ):
             raise TypeError("update() takes the simulator's arrays as they are; use predict() and correct()")
         self._control[:width] = control
-        if ids.shape[0] > self._H_slots.shape[0]:
-            self._H_used = np.zeros((2 * ids.shape[0], 2, 5))
-            self._H_slots = np.zeros(2 * ids.shape[0], dtype=np.int64)
+        self._reserve_jacobians(ids.shape[0])
         if not self._tracking or (self.resync_every and self._calls_since_resync + 1 >= self.resync_every):
             # a resync falls between the two (or tracking starts): the calls one at a time, as the library's
             return self.predict(control, control_cov=control_cov) + self.correct(ids, readings)
@@ -462,9 +460,7 @@ class EKFSLAM:
             raise ValueError(f"confirm_within must be an integer >= 0, got {confirm_within!r}")
         readings = self._readings(readings)
         m = readings.shape[0]
-        if m > self._H_slots.shape[0]:
-            self._H_used = np.zeros((2 * m, 2, 5))
-            self._H_slots = np.zeros(2 * m, dtype=np.int64)
+        self._reserve_jacobians(m)
         slots = np.empty(m, dtype=np.int64)
         new = np.empty(m, dtype=bool)
         forget = np.empty(self.n_landmarks, dtype=np.int64)
