@@ -109,6 +109,11 @@ KERNELS: dict[str, tuple[str, str, str]] = {
         "wheel_reading",
         f"void({_F8_2}, f8, f8, {_F8_1}, {_F8_1}, {_F8_1}, {_F8_2}, {_F8_1})",
     ),
+    "measure_step": (
+        "ekfslam_gym.sim.measurement_kernels",
+        "measure_step",
+        f"void(f8, f8, f8, f8, f8, f8, f8, f8, {_F8_1}, {_F8_1}, {_F8_1}, {_F8_2}, {_F8_1}, {_F8_2}, f8, f8)",
+    ),
 }
 
 # Every file the kernels' machine code depends on, relative to the package: the build compiles their digest
@@ -122,6 +127,7 @@ SOURCES: tuple[str, ...] = (
     "filter/association_kernels.py",
     "sim/geometry.py",
     "sim/odometry_kernels.py",
+    "sim/measurement_kernels.py",
     "envs/kernels.py",
     "envs/observation_codes.py",
     "envs/association_truth.py",

@@ -227,3 +227,37 @@ def test_bad_parameters_raise(make_kwargs, match: str) -> None:
 def test_start_overlapping_a_wall_raises() -> None:
     with pytest.raises(ValueError, match="overlaps a wall"):
         World(_layout(BOX, [], (0.1, 5.0, 0.0)))
+
+
+@pytest.mark.parametrize(
+    "sensor",
+    [SensorParams(), SensorParams(detection_prob=0.8), SensorParams(clutter_rate=0.5)],
+    ids=["ideal", "misses", "clutter"],
+)
+def test_wheel_odometry_and_readings_equal_the_two_separate_readings(sensor: SensorParams) -> None:
+    """The fused call (one draw, one kernel where the sensor is ideal) gives the very values of
+    ``wheel_odometry`` then ``sense`` from the same generator, over a drive with wall contacts and with steps
+    that read no landmark."""
+    layout = make_layout("rooms", np.random.default_rng(7), 30)
+    fused, separate = World(layout, sensor=sensor), World(layout, sensor=sensor)
+    rng_fused, rng_separate = np.random.default_rng(3), np.random.default_rng(3)
+    drive = np.random.default_rng(5)
+    empty = contacts = 0
+    for k in range(1500):
+        if k % 20 == 0:  # held commands, mostly forward, reach the walls
+            v, omega = drive.uniform((0.2, -1.0), (1.0, 1.0)) * (
+                fused.robot_params.v_max,
+                fused.robot_params.omega_max,
+            )
+        contacts += fused.step(v, omega)
+        separate.step(v, omega)
+        odometry, readings = fused.wheel_odometry_and_readings(rng_fused)
+        expected_odometry, expected_readings = (
+            separate.wheel_odometry(rng_separate),
+            separate.sense(rng_separate),
+        )
+        for got, want in zip((*odometry, *readings), (*expected_odometry, *expected_readings), strict=True):
+            np.testing.assert_array_equal(got, want)
+        empty += readings.ids.size == 0
+    assert contacts > 0 and empty > 0  # both kinds of step were exercised
+    assert rng_fused.bit_generator.state == rng_separate.bit_generator.state

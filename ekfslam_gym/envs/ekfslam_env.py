@@ -228,6 +228,7 @@ class EKFSLAMEnv(gym.Env):
         )  # fmt: skip
         # The world's odometer for the filter's motion model, chosen once per episode rather than every step.
         self._read_odometry = getattr(self._world, ODOMETERS[f.motion_model])
+        self._wheels = f.motion_model == "wheels"  # then one call reads the odometry and the landmarks
         self._bounds = np.asarray(layout.bounds, dtype=np.float64)
         self._true_landmarks = np.ascontiguousarray(layout.landmarks, dtype=np.float64)
         self._memory = make_memory(self._bounds, cfg.observation.memory_resolution)
@@ -342,8 +343,11 @@ class EKFSLAMEnv(gym.Env):
         x1, y1, _ = world.pose_tuple
         self._path_length += math.hypot(x1 - x0, y1 - y0)
         self._collisions += collided
-        odometry = self._read_odometry(rng)
-        readings = world.sense(rng)
+        if self._wheels:
+            odometry, readings = world.wheel_odometry_and_readings(rng)
+        else:
+            odometry = self._read_odometry(rng)
+            readings = world.sense(rng)
         self._odometry, self._odometry_cov, self._last_readings = odometry.u, odometry.cov, readings
         self._t += 1
         self._action = (a0, a1)

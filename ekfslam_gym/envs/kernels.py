@@ -102,10 +102,11 @@ def _window(out, o, memory, bounds, resolution, x, y, c, s, grid, extent, sample
                     forward = -extent + col * cell + (j + 0.5) * step
                     wx = x + c * forward - s * left
                     wy = y + s * forward + c * left
-                    mc = int(math.floor((wx - bounds[0]) * per_metre))
-                    mr = int(math.floor((wy - bounds[1]) * per_metre))
-                    if 0 <= mr < rows and 0 <= mc < cols:
-                        total += memory[mr, mc]
+                    # Truncation is the floor on the non-negative side; the negative side lies outside.
+                    fc = (wx - bounds[0]) * per_metre
+                    fr = (wy - bounds[1]) * per_metre
+                    if 0.0 <= fr < rows and 0.0 <= fc < cols:
+                        total += memory[int(fr), int(fc)]
                     else:
                         total += 1.0
             out[o + row * grid + col] = total / (samples * samples)

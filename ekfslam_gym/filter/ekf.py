@@ -19,6 +19,9 @@ from ..angles import wrap_angle
 from . import association, codes
 from .association import UnknownCorrection
 
+_FLOAT64 = np.dtype(np.float64)
+_INT64 = np.dtype(np.int64)
+
 COURSE_MOTION_NOISE = np.diag([0.1, 0.1, 0.01])
 COURSE_MEASUREMENT_NOISE = 0.01 * np.eye(2)
 
@@ -381,14 +384,14 @@ class EKFSLAM:
         (m,), C-contiguous float64 ``readings`` (m, 2); anything else raises ``TypeError``. The kernels still
         check values: a bad id or reading raises after the prediction. Returns the change of log det Sigma."""
         width = self._width
-        if not (
+        if not (  # dtypes by identity: the native float64 and int64 are singletons (and 4x cheaper to test)
             control.shape == (width,)
             and control_cov.shape == (width, width)
-            and control.dtype == np.float64
-            and control_cov.dtype == np.float64
+            and control.dtype is _FLOAT64
+            and control_cov.dtype is _FLOAT64
             and control_cov.flags.c_contiguous
-            and ids.dtype == np.int64
-            and readings.dtype == np.float64
+            and ids.dtype is _INT64
+            and readings.dtype is _FLOAT64
             and readings.shape == (ids.shape[0], 2)
             and ids.flags.c_contiguous
             and readings.flags.c_contiguous
@@ -407,10 +410,15 @@ class EKFSLAM:
         )  # fmt: skip
         if status == codes.BAD_INPUT:
             raise ValueError(f"control and its noise must be finite, got {control!r}")
-        self._after_call(delta)
+        # Both calls' bookkeeping (``_after_call`` twice): tracking, and no resync after the first (checked above).
+        self._log_det += delta
         if correction_status != codes.OK:
+            self._calls_since_resync += 1
             self._raise_correction_status(correction_status, ids)
-        self._after_call(change)
+        self._log_det += change
+        self._calls_since_resync += 2
+        if self.resync_every and self._calls_since_resync >= self.resync_every:
+            self.resync()
         return delta + change
 
     # ------------------------------------------------------------------ unknown correspondences

@@ -355,8 +355,17 @@ def _update(
         mean[row] += v
     mean[2] = wrap_angle(mean[2])
     # Four (then two) rows of W^T per sweep of Sigma's row: the same products subtracted in the same order as
-    # one at a time (so Sigma stays exactly symmetric), with a quarter of the loads and stores.
+    # one at a time (so Sigma stays exactly symmetric), with a quarter of the loads and stores. A row whose
+    # column of W^T is zero (a landmark not yet seen, uncorrelated with everything) would subtract only zeros:
+    # it is skipped, which makes the update O(k N n) for n seen of N states instead of O(k N^2).
     for row in range(n):
+        untouched = True
+        for i in range(k):
+            if Wt[i, row] != 0.0:
+                untouched = False
+                break
+        if untouched:
+            continue
         r = cov[row]
         i = 0
         while i + 4 <= k:

@@ -221,6 +221,39 @@ def wheel_reading(
         u[0], u[1], u[2] = decompose_wheels(
             trace[0, 0], trace[0, 1], trace[0, 2], x, y, trace[last, 2], wheel_base
         )
+    _add_wheel_noise(contact_travel, params, normals, u, cov)
+
+
+@njit(cache=True)
+def sensed_wheel_reading(
+    x0: float,
+    y0: float,
+    theta0: float,
+    x1: float,
+    y1: float,
+    theta1: float,
+    wheel_base: float,
+    contact_travel: float,
+    params: np.ndarray,
+    normals: np.ndarray,
+    u: np.ndarray,
+    cov: np.ndarray,
+    u_true: np.ndarray,
+) -> None:
+    """``wheel_reading`` with the slide sensed (``params[4]`` = 1), from the step's start and end poses as
+    scalars: the same values, without building the (2, 3) trace array (the env's hot path)."""
+    u_true[0], u_true[1], u_true[2] = decompose_wheels(x0, y0, theta0, x1, y1, theta1, wheel_base)
+    u[0] = u_true[0]
+    u[1] = u_true[1]
+    u[2] = u_true[2]
+    _add_wheel_noise(contact_travel, params, normals, u, cov)
+
+
+@njit(cache=True)
+def _add_wheel_noise(
+    contact_travel: float, params: np.ndarray, normals: np.ndarray, u: np.ndarray, cov: np.ndarray
+) -> None:
+    """u += std * normals (the slip only when the slide is sensed) and cov's diagonal = std^2, std from u."""
     std = wheel_std(u[0], u[1], contact_travel, params)
     for i in range(3):
         if i < 2 or params[4] != 0.0:

@@ -97,6 +97,8 @@ class RangeBearingSensor:
         self.wall_radius = float(wall_radius)
         p = self.params
         self._half_fov = 0.5 * p.fov
+        # Reads every visible landmark and nothing else: then ``sense`` draws only the (m, 2) normals.
+        self.ideal = p.detection_prob >= 1.0 and p.clutter_rate <= 0.0
         self.beam_angles = np.arange(p.n_beams) * (2.0 * math.pi / p.n_beams)
         # scratch buffers: the kernel writes the m visible readings here and sense() copies them out
         self._ids = np.empty(self.landmarks.shape[0], dtype=np.int64)

@@ -196,12 +196,32 @@ class World:
         covariance diag(std^2) (3, 3); see ``WheelOdometryNoise``. A step in contact with a wall (the bumper:
         ``collided``) has a slip variance growing with the commanded travel max(|v_previous|, |v|) dt (the body
         answers a command one substep late). Draws 3 normals from ``rng``; call once per step."""
-        contact_travel = 0.0
-        if self._collided:
-            speeds = [abs(v) for v, _ in self._commands[-2:]]
-            contact_travel = max(speeds) * self.dt
         trace = self._trace if self._trace_substeps else (self._prev_pose, self._pose)
-        return measure_wheels(trace, self.wheel_noise, contact_travel, rng)
+        return measure_wheels(trace, self.wheel_noise, self._contact_travel(), rng)
+
+    def wheel_odometry_and_readings(self, rng: np.random.Generator) -> tuple[WheelOdometryReading, Readings]:
+        """``(wheel_odometry(rng), sense(rng))``: the same draws and values, in one compiled call and one draw
+        of 3 + 2 m normals where the slide is sensed and the sensor neither misses nor clutters (the defaults;
+        a Generator's normals do not depend on how a draw is split); otherwise those two calls."""
+        if self._trace_substeps or not self.sensor.ideal:
+            return self.wheel_odometry(rng), self.sense(rng)
+        ids, z = readings = self.sensor.true_readings(self._pose)
+        normals = rng.standard_normal(3 + 2 * z.shape[0])
+        reading = WheelOdometryReading(np.empty(3), np.zeros((3, 3)), np.empty(3))
+        x0, y0, theta0 = self._prev_pose
+        x1, y1, theta1 = self._pose
+        noise, sensor = self.wheel_noise, self.sensor_params
+        compiled.measure_step(
+            x0, y0, theta0, x1, y1, theta1, noise.wheel_base, self._contact_travel(), noise.vector, normals,
+            reading.u, reading.cov, reading.u_true, z, sensor.range_std, sensor.bearing_std,
+        )  # fmt: skip
+        return reading, readings
+
+    def _contact_travel(self) -> float:
+        """The commanded travel (m) of the last step if it touched a wall, else 0 (``WheelOdometryNoise``)."""
+        if not self._collided:
+            return 0.0
+        return max(abs(v) for v, _ in self._commands[-2:]) * self.dt
 
     # --- sensing -------------------------------------------------------------------------------------------
     def sense(self, rng: np.random.Generator) -> Readings:
