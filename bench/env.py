@@ -3,9 +3,10 @@
     OPENBLAS_NUM_THREADS=1 python bench/env.py [--steps 20000] [--landmarks 10 50 200]
 
 Raw means one process, random actions drawn beforehand, no agent. The breakdown times each stage of a step
-on its own over the same kind of drive: physics (pymunk), odometry, sensing (landmark readings and the wall
-scan), filter (predict and correct), observation (its kernel, with a scan of its own, and the copy handed
-out) and the rest of ``step`` (coverage memory, reward, metrics, info: the env's own glue).
+on its own over the same kind of drive, as the env runs it at the default config: physics (pymunk), readings
+(wheel odometry and landmark readings, one call), filter (``EKFSLAM.update``: predict and correct),
+observation (its kernel, with the wall scan, and the copy handed out) and the rest of ``step`` (coverage
+memory, reward, metrics, info: the env's own glue).
 """
 
 from __future__ import annotations
@@ -53,19 +54,15 @@ def breakdown(overrides: dict, steps: int) -> dict[str, float]:
     memory, bounds = env.coverage_memory, env.bounds
     # Read-only views of the filter's state, fetched once as the env does (the filter updates them in place).
     mean, cov, observed, pose_given_map = ekf.mean, ekf.cov, ekf.observed, ekf.pose_cov_given_map
-    timings = dict.fromkeys(["physics", "odometry", "sensing", "filter", "observation", "total step"], 0.0)
+    timings = dict.fromkeys(["physics", "readings", "filter", "observation", "total step"], 0.0)
     clock = time.perf_counter
     for a in actions:
         t0 = clock()
         world.step(a[0] * v_max, a[1] * w_max)
         t1 = clock()
-        odometry = world.odometry(rng)
-        t2 = clock()
-        readings = world.sense(rng)
-        world.scan()
+        odometry, readings = world.wheel_odometry_and_readings(rng)
         t3 = clock()
-        ekf.predict(odometry.u, control_cov=odometry.cov)
-        ekf.correct(readings.ids, readings.z)
+        ekf.update(odometry.u, odometry.cov, readings.ids, readings.z)
         t4 = clock()
         compiled.fill_observation(
             out, layout.offsets, constants, mean, cov, observed, ekf.log_det, pose_given_map, world.scan(), memory,
@@ -74,8 +71,7 @@ def breakdown(overrides: dict, steps: int) -> dict[str, float]:
         out.copy()
         t5 = clock()
         timings["physics"] += t1 - t0
-        timings["odometry"] += t2 - t1
-        timings["sensing"] += t3 - t2
+        timings["readings"] += t3 - t1
         timings["filter"] += t4 - t3
         timings["observation"] += t5 - t4
     env.reset(seed=0)
