@@ -55,6 +55,16 @@ class EKFSLAMEnv(gym.Env):
     describes every entry and its normalisation. The time-left entry of ``globals`` falls from 1 at reset to
     exactly 0 at the step limit in force (see Episode End).
 
+    Memory and a map, for a convolutional policy: with ``observation = {"kind": "dict", "belief_image": True}``
+    (off by default; a ``box`` observation with it raises ``ValueError``) the Dict gains ``belief_image``,
+    ``Box(0, 1, (3, S, S), float32)``, S = ``observation.belief_size`` (16) cells reaching
+    ``observation.belief_extent`` m (8) to each side, centred on the pose estimate and turned with its heading
+    like the coverage window. Channel 0 is the coverage memory; 1 the seen landmarks' estimates, each in its
+    cell valued by its certainty 1 / (1 + sqrt(tr Sigma_jj) / cell size); 2 the walls the scan has hit, kept in
+    a wall memory (``wall_memory``, laid out like ``coverage_memory``) that every control step marks at the
+    scan's endpoints placed from the pose estimate. All of it comes from the belief, never from the true pose,
+    landmarks or walls; ``agents.extractors.BeliefCNN`` reads it (``configs/ppo_belief_cnn.yaml``).
+
     ## Rewards
     The sum of the terms in ``info["reward_terms"]``, those with a non-zero weight in ``reward`` (the names and
     default weights are ``ekfslam_gym.envs.rewards.REWARD_TERMS``; each term is the hook
@@ -137,7 +147,7 @@ class EKFSLAMEnv(gym.Env):
 
     After ``reset``, agents and evaluation read the belief through public, read-only views: ``filter``
     (``mean``, ``cov``, ``observed``, ...), ``observation_layout``, ``bounds``, ``coverage_memory``,
-    ``elapsed_steps``; ``world`` and ``true_landmarks`` are privileged (baselines and evaluation only).
+    ``wall_memory`` (with the belief image), ``elapsed_steps``; ``world`` and ``true_landmarks`` are privileged (baselines and evaluation only).
 
     ## Registered Configurations
     - ``EKFSLAM-v0``: 20 x 20 m arena, 30 landmarks, 500 steps of 0.1 s.
