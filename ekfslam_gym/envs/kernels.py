@@ -226,29 +226,36 @@ def mark_walls(walls, pose, bounds, resolution, scan, beam_angles, scan_max_rang
 
 
 @njit(cache=True)
-def _window_max(out, o, memory, bounds, resolution, x, y, c, s, grid, extent, samples):
-    """``_window`` with each cell the largest of its samples instead of their mean (a wall a sample wide still
-    reads 1); outside the world counts as 1 too. Returns the next offset."""
-    rows, cols = memory.shape
-    cell = 2.0 * extent / grid
+def _belief_windows(out, size, coverage, walls, bounds, resolution, x, y, c, s, extent, samples):
+    """The coverage and wall channels in one pass over the sample points (each point read in both memories):
+    a coverage cell is the mean of its samples x samples points, as ``_window``'s, a wall cell the largest (a wall
+    a sample wide still reads 1); outside the world both read 1. Same cell layout as ``_window``."""
+    rows, cols = coverage.shape
+    cell = 2.0 * extent / size
     step = cell / samples
     per_metre = 1.0 / resolution
-    for row in range(grid):
-        for col in range(grid):
+    o_coverage = BELIEF_COVERAGE * size * size
+    o_walls = BELIEF_WALLS * size * size
+    for row in range(size):
+        for col in range(size):
+            total = 0.0
             largest = 0.0
             for i in range(samples):
                 left = extent - row * cell - (i + 0.5) * step
                 for j in range(samples):
                     forward = -extent + col * cell + (j + 0.5) * step
-                    wx = x + c * forward - s * left
-                    wy = y + s * forward + c * left
-                    fc = (wx - bounds[0]) * per_metre
-                    fr = (wy - bounds[1]) * per_metre
-                    value = memory[int(fr), int(fc)] if 0.0 <= fr < rows and 0.0 <= fc < cols else 1.0
-                    if value > largest:
-                        largest = value
-            out[o + row * grid + col] = largest
-    return o + grid * grid
+                    fc = (x + c * forward - s * left - bounds[0]) * per_metre
+                    fr = (y + s * forward + c * left - bounds[1]) * per_metre
+                    if 0.0 <= fr < rows and 0.0 <= fc < cols:
+                        r, k = int(fr), int(fc)
+                        total += coverage[r, k]
+                        if walls[r, k] > largest:
+                            largest = walls[r, k]
+                    else:
+                        total += 1.0
+                        largest = 1.0
+            out[o_coverage + row * size + col] = total / (samples * samples)
+            out[o_walls + row * size + col] = largest
 
 
 @njit(cache=True)
@@ -259,7 +266,8 @@ def fill_belief_image(out, size, coverage, walls, bounds, mean, cov, observed, r
     each side, the cells laid out as ``_window``'s (row 0 furthest to the left, column 0 furthest behind).
     Channel ``BELIEF_COVERAGE``: the coverage memory, each cell the mean of samples x samples points in it
     (samples = ceil(cell / resolution), so every memory cell under it counts); ``BELIEF_WALLS``: the wall memory
-    of ``mark_walls``, each cell the largest of its points (a wall is thin); both 1 outside the world.
+    of ``mark_walls``, each cell the largest of its points (a wall is thin); both 1 outside the world
+    (``_belief_windows``, one pass for both).
     ``BELIEF_LANDMARKS``: each seen landmark's estimate in the cell that holds it, valued by its certainty
     1 / (1 + sqrt(tr Sigma_jj) / cell): 1/2 when the expected position error (the root of the trace of the
     marginal 2x2 covariance, Thrun, Burgard & Fox ch. 3) is one cell, near 1 when far below it; the largest
@@ -270,8 +278,7 @@ def fill_belief_image(out, size, coverage, walls, bounds, mean, cov, observed, r
     cell = 2.0 * extent / size
     samples = max(1, int(math.ceil(cell / resolution - 1e-9)))
     area = size * size
-    _window(out, BELIEF_COVERAGE * area, coverage, bounds, resolution, x, y, c, s, size, extent, samples)
-    _window_max(out, BELIEF_WALLS * area, walls, bounds, resolution, x, y, c, s, size, extent, samples)
+    _belief_windows(out, size, coverage, walls, bounds, resolution, x, y, c, s, extent, samples)
     o = BELIEF_LANDMARKS * area
     for i in range(area):
         out[o + i] = 0.0
