@@ -1,5 +1,10 @@
 """A PPO policy trained by ``train.py``, loaded from its saved SB3 model, acting deterministically.
 
+The algorithm is the run's ``algo`` (``ALGOS``, rl-zoo3's names): ``ppo`` (stable-baselines3's PPO, the default)
+or ``ppo_lstm`` (sb3-contrib's RecurrentPPO), read from the trainer's record beside the model (else from the
+policy class saved in the zip). A recurrent policy carries its LSTM state from one ``act`` to the next and
+starts every episode (``reset``) from a fresh one, as sb3-contrib's ``predict(state, episode_start)`` expects.
+
 File convention shared with the trainer: the model is ``<model>.zip`` and, when observations were normalised
 during training, the VecNormalize statistics are ``<model>_vecnormalize.pkl`` beside it. Without those
 statistics a policy trained on normalised observations would see inputs on the wrong scale, so they are
@@ -14,7 +19,9 @@ stable-baselines3 is in the ``train`` extra: it is imported only when a model is
 
 from __future__ import annotations
 
+import json
 import pickle
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -24,16 +31,43 @@ import numpy as np
 from .base import Agent
 
 VECNORMALIZE_SUFFIX = "_vecnormalize.pkl"
+# rl-zoo3's algorithm names -> (module, class); a config's train_settings choose one with ``algo``.
+ALGOS: dict[str, tuple[str, str]] = {
+    "ppo": ("stable_baselines3", "PPO"),
+    "ppo_lstm": ("sb3_contrib", "RecurrentPPO"),
+}
+
+
+def algo_class(algo: str = "ppo") -> Any:
+    """The SB3 class of the algorithm named ``algo`` in ``ALGOS`` (imported only now)."""
+    if algo not in ALGOS:
+        raise ValueError(f"algo must be one of {sorted(ALGOS)}, got {algo!r}")
+    module, name = ALGOS[algo]
+    try:
+        imported = __import__(module, fromlist=[name])
+    except ImportError as error:  # pragma: no cover - depends on the installed extras
+        raise ImportError(
+            f"algo {algo} needs {module.replace('_', '-')} and torch: pip install 'ekfslam-gym[train]'"
+        ) from error
+    return getattr(imported, name)
 
 
 def _import_ppo() -> Any:
+    return algo_class("ppo")
+
+
+def saved_algo(zip_path: str | Path, record: dict[str, Any] | None = None) -> str:
+    """The ``algo`` a saved model was trained with: the trainer's record (``entry.algo``, absent = ``ppo``), or
+    without one the saved policy class (sb3-contrib's recurrent policies are ``ppo_lstm``)."""
+    if record is not None and isinstance(record.get("entry"), dict):
+        return str(record["entry"].get("algo", "ppo"))
     try:
-        from stable_baselines3 import PPO
-    except ImportError as error:  # pragma: no cover - depends on the installed extras
-        raise ImportError(
-            "the ppo agent needs stable-baselines3 and torch: pip install 'ekfslam-gym[train]'"
-        ) from error
-    return PPO
+        with zipfile.ZipFile(zip_path) as archive:
+            data = json.loads(archive.read("data"))
+        module = str(data.get("policy_class", {}).get("__module__", ""))
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile):
+        return "ppo"
+    return "ppo_lstm" if module.startswith("sb3_contrib.common.recurrent") else "ppo"
 
 
 def model_paths(path: str | Path) -> tuple[Path, Path]:
@@ -72,7 +106,8 @@ def training_record(zip_path: str | Path) -> dict[str, Any] | None:
 
 
 class PPOAgent(Agent):
-    """Acts with a saved SB3 PPO policy (deterministic: the mean action), observations normalised as in training.
+    """Acts with a saved SB3 PPO or RecurrentPPO policy (deterministic: the mean action), observations normalised
+    as in training; a recurrent policy's LSTM state is carried across steps and reset at every episode start.
 
     Args:
         model_path: ``<model>.zip`` (or the path without ``.zip``); loads ``<model>_vecnormalize.pkl`` beside
@@ -82,6 +117,7 @@ class PPOAgent(Agent):
         deterministic: act with the mean action (the default for evaluation).
         device: torch device for the policy.
         require_vecnormalize: raise if the statistics file is missing rather than act unnormalised.
+        algo: ``ppo`` or ``ppo_lstm`` (``ALGOS``) for ``model_path``; None reads it beside the model.
     """
 
     name = "ppo"
@@ -95,6 +131,7 @@ class PPOAgent(Agent):
         deterministic: bool = True,
         device: str = "cpu",
         require_vecnormalize: bool = False,
+        algo: str | None = None,
     ) -> None:
         super().__init__()
         if (model_path is None) == (model is None):
@@ -107,13 +144,13 @@ class PPOAgent(Agent):
             zip_path, stats_path = model_paths(model_path)
             if not zip_path.is_file():
                 raise FileNotFoundError(f"no saved model at {zip_path}")
-            model = _import_ppo().load(zip_path, device=device)
+            record = training_record(zip_path)
+            model = algo_class(algo or saved_algo(zip_path, record)).load(zip_path, device=device)
             if stats_path.is_file():
                 vecnormalize = load_vecnormalize(stats_path)
             elif require_vecnormalize:
                 raise FileNotFoundError(f"no VecNormalize statistics at {stats_path}")
             self.model_path = zip_path
-            record = training_record(zip_path)
             if record is not None:
                 self.trained_env_id = record.get("env_id")
                 entry = record.get("entry")
@@ -121,11 +158,17 @@ class PPOAgent(Agent):
                     self.trained_env_kwargs = entry["env_kwargs"]
         self.model = model
         self.vecnormalize = vecnormalize
+        # sb3-contrib's recurrent policies (RecurrentPPO) have an LSTM state; plain PPO policies do not.
+        self.recurrent = getattr(model.policy, "lstm_hidden_state_shape", None) is not None
+        self._state: Any = None
+        self._episode_start = np.ones((1,), dtype=bool)
 
     def reset(self, env: gym.Env, seed: int | None = None) -> None:
         super().reset(env, seed)
+        self._state = None  # a fresh LSTM state: zeros, and episode_start tells the policy so too
+        self._episode_start = np.ones((1,), dtype=bool)
         expected = self.model.observation_space
-        if getattr(expected, "shape", None) != getattr(env.observation_space, "shape", None):
+        if _shapes(expected) != _shapes(env.observation_space):
             raise ValueError(
                 f"the model was trained on observations {expected}, the env gives {env.observation_space}; "
                 "evaluate it on the env id and config it was trained with"
@@ -134,7 +177,16 @@ class PPOAgent(Agent):
     def act(self, observation: Any) -> np.ndarray:
         if self.vecnormalize is not None and self.vecnormalize.norm_obs:
             observation = self.vecnormalize.normalize_obs(observation)
-        action, _ = self.model.predict(observation, deterministic=self.deterministic)
+        if self.recurrent:
+            action, self._state = self.model.predict(
+                observation,
+                state=self._state,
+                episode_start=self._episode_start,
+                deterministic=self.deterministic,
+            )
+            self._episode_start = np.zeros((1,), dtype=bool)
+        else:
+            action, _ = self.model.predict(observation, deterministic=self.deterministic)
         space = self.model.action_space
         if isinstance(space, gym.spaces.Discrete):  # action.kind primitives
             return np.int64(np.asarray(action).reshape(()))
@@ -142,3 +194,10 @@ class PPOAgent(Agent):
 
     def __repr__(self) -> str:
         return f"PPOAgent(model_path={str(self.model_path)!r})"
+
+
+def _shapes(space: gym.Space) -> Any:
+    """A space's shape, or for a Dict its keys' shapes (so a missing belief image is noticed)."""
+    if isinstance(space, gym.spaces.Dict):
+        return {key: _shapes(sub) for key, sub in space.spaces.items()}
+    return getattr(space, "shape", None)

@@ -1,4 +1,4 @@
-"""Train PPO (Stable-Baselines3) on an EKFSLAM env from a YAML config in rl-zoo3 style.
+"""Train PPO (Stable-Baselines3) or RecurrentPPO (sb3-contrib) on an EKFSLAM env from a YAML config in rl-zoo3 style.
 
 ``train(env_id, seed, entry, out)`` is the entry for code (the sweep's Ray workers import it: a pip install has
 no ``train.py``); ``main`` is the command line, which the repository's ``train.py`` runs:
@@ -11,9 +11,14 @@ id with the PPO hyperparameters plus ``n_timesteps``, ``n_envs``, ``normalize`` 
 its keyword arguments) and ``env_kwargs``. The settings only this script knows sit in a top-level
 ``train_settings`` section, keyed by env id, where rl-zoo3 does not look: ``vec_env`` (dummy | subproc),
 ``eval_freq``/``eval_episodes``/``eval_seed`` (model selection on evaluation seeds, never the held-out suite),
-``checkpoint_freq`` (total env steps), ``torch_threads`` and ``pretrain`` (planner-guided training: the greedy
+``checkpoint_freq`` (total env steps), ``torch_threads``, ``algo`` (rl-zoo3's name of the algorithm: ``ppo``, the
+default, or ``ppo_lstm``, sb3-contrib's RecurrentPPO with ``policy: MlpLstmPolicy`` or ``MultiInputLstmPolicy``;
+``agents.ppo.ALGOS``; rl-zoo3 takes it as ``--algo``) and ``pretrain`` (planner-guided training: the greedy
 planner's demonstrations cloned into the policy before PPO, ``agents.imitation``; absent means none, and a
-resumed run never clones again). ``--hyperparams`` overrides either kind. The output folder receives:
+resumed run never clones again; ``ppo`` only). ``--hyperparams`` overrides either kind. Class names in
+``policy_kwargs`` (``features_extractor_class``, ``activation_fn``, ``optimizer_class``) may be given dotted,
+e.g. ``agents.extractors.BeliefCNN`` or ``torch.nn.ReLU`` (``nn.ReLU`` too): they are imported when the model
+is built, and the record keeps the names. The output folder receives:
 
 - ``model.zip`` + ``model_vecnormalize.pkl``: the final policy and its normalisation statistics;
 - ``best_model.zip`` + ``best_model_vecnormalize.pkl``: the best on the evaluation seeds;
@@ -46,16 +51,19 @@ from typing import Any
 import yaml
 
 from .imitation import validate_pretrain
+from .ppo import ALGOS, algo_class
 
 NORMALIZE_DEFAULTS = {"norm_obs": True, "norm_reward": True}
 TRAIN_KEYS = {
     "n_timesteps", "policy", "n_envs", "vec_env", "normalize", "env_kwargs", "eval_freq", "eval_episodes",
-    "eval_seed", "checkpoint_freq", "torch_threads", "pretrain",
+    "eval_seed", "checkpoint_freq", "torch_threads", "pretrain", "algo",
 }  # fmt: skip
 SETTINGS_SECTION = "train_settings"
 SETTINGS_KEYS = {
-    "vec_env", "eval_freq", "eval_episodes", "eval_seed", "checkpoint_freq", "torch_threads", "pretrain",
+    "vec_env", "eval_freq", "eval_episodes", "eval_seed", "checkpoint_freq", "torch_threads", "pretrain", "algo",
 }  # fmt: skip
+# policy_kwargs entries that name a class or function, resolved from a dotted name (``resolve_policy_kwargs``).
+CLASS_KWARGS = ("features_extractor_class", "activation_fn", "optimizer_class")
 
 
 # ---------------------------------------------------------------------------------------------- config
@@ -92,13 +100,47 @@ def load_entry(config_path: Path, env_id: str) -> dict[str, Any]:
     entry.setdefault("checkpoint_freq", 0)
     entry.setdefault("torch_threads", 1)
     entry.setdefault("pretrain", None)
+    entry.setdefault("algo", "ppo")
     if entry["vec_env"] not in ("dummy", "subproc"):
         raise SystemExit(f"vec_env must be dummy or subproc, got {entry['vec_env']!r}")
     try:
+        check_algo(entry)
         entry["pretrain"] = validate_pretrain(entry["pretrain"], entry)
     except ValueError as error:
         raise SystemExit(f"{config_path}: {SETTINGS_SECTION} for {env_id!r}: {error}") from None
     return entry
+
+
+def check_algo(entry: dict[str, Any]) -> None:
+    """ValueError for an unknown ``algo``, or for behaviour cloning (``pretrain``) with a recurrent one: the
+    cloning trains a feed-forward policy on single observations (``agents.imitation``)."""
+    algo = entry.get("algo", "ppo")
+    if algo not in ALGOS:
+        raise ValueError(f"algo must be one of {sorted(ALGOS)}, got {algo!r}")
+    if algo != "ppo" and entry.get("pretrain"):
+        raise ValueError(f"pretrain (behaviour cloning) supports algo ppo only, not {algo!r}")
+
+
+def import_dotted(name: str) -> Any:
+    """The object a dotted name points at (``agents.extractors.BeliefCNN``; ``nn.X`` is ``torch.nn.X``)."""
+    import importlib
+
+    if name.startswith("nn."):
+        name = "torch." + name
+    module, _, attribute = name.rpartition(".")
+    if not module:
+        raise ValueError(f"{name!r} is not a dotted name (module.Class)")
+    try:
+        return getattr(importlib.import_module(module), attribute)
+    except (ImportError, AttributeError) as error:
+        raise ValueError(f"cannot import {name!r}: {error}") from None
+
+
+def resolve_policy_kwargs(kwargs: dict[str, Any] | None) -> dict[str, Any] | None:
+    """``policy_kwargs`` with the class names of ``CLASS_KWARGS`` given as dotted strings imported."""
+    if kwargs is None:
+        return None
+    return {k: import_dotted(v) if k in CLASS_KWARGS and isinstance(v, str) else v for k, v in kwargs.items()}
 
 
 def parse_hyperparams(pairs: list[str]) -> dict[str, Any]:
@@ -130,6 +172,7 @@ def versions() -> dict[str, str]:
         "pymunk",
         "gymnasium",
         "stable-baselines3",
+        "sb3-contrib",
         "torch",
     ):
         try:
@@ -265,7 +308,8 @@ def make_envs(env_id: str, entry: dict[str, Any], n_envs: int, seed: int, monito
             train_env.training = True
         else:
             train_env = VecNormalize(train_env, **kwargs)
-        eval_env = VecNormalize(eval_env, training=False, norm_obs=kwargs["norm_obs"], norm_reward=False)
+        eval_env = VecNormalize(eval_env, training=False, norm_obs=kwargs["norm_obs"], norm_reward=False,
+                                norm_obs_keys=kwargs.get("norm_obs_keys"))  # fmt: skip
     return train_env, eval_env
 
 
@@ -308,7 +352,8 @@ def train(
     progress: bool = True,
     command: list[str] | None = None,
 ) -> Path:
-    """Train PPO on ``env_id`` with the resolved config ``entry`` into the run folder ``out``; returns ``out``.
+    """Train ``entry["algo"]`` (PPO by default) on ``env_id`` with the resolved config ``entry`` into the run
+    folder ``out``; returns ``out``.
 
     With ``resume``, continue the run in ``out`` from its last checkpoint up to ``entry["n_timesteps"]`` (see
     the module docstring); ``command`` is the command line recorded in ``config.yaml`` (the arguments of
@@ -321,13 +366,15 @@ def train(
     checkpoint = latest_checkpoint(out / "checkpoints") if resume else None
     if resume and checkpoint is None:
         raise ValueError(f"{out / 'checkpoints'} holds no checkpoint to resume from")
-    entry = {**entry, "pretrain": validate_pretrain(entry.get("pretrain"), entry)}  # after --hyperparams
+    entry = {"algo": "ppo", **entry}
+    entry["pretrain"] = validate_pretrain(entry.get("pretrain"), entry)  # after --hyperparams
+    check_algo(entry)
 
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     import numpy as np
     import torch
-    from stable_baselines3 import PPO
 
+    algo = algo_class(entry["algo"])
     torch.set_num_threads(int(entry["torch_threads"]))
     out.mkdir(parents=True, exist_ok=True)
     n_envs = int(entry["n_envs"])
@@ -348,8 +395,10 @@ def train(
 
     hyper = {k: schedule(v) if k in ("learning_rate", "clip_range") else v
              for k, v in entry.items() if k not in TRAIN_KEYS}  # fmt: skip
+    if "policy_kwargs" in hyper:
+        hyper["policy_kwargs"] = resolve_policy_kwargs(hyper["policy_kwargs"])
     if checkpoint is None:
-        model = PPO(
+        model = algo(
             entry["policy"], train_env, seed=seed, tensorboard_log=str(out / "tb"), verbose=0, **hyper
         )
         if entry["pretrain"] is not None:  # planner-guided: behaviour cloning before PPO (agents.imitation)
@@ -362,7 +411,7 @@ def train(
         reset = True
     else:
         path, done = checkpoint
-        model = PPO.load(str(path), env=train_env, tensorboard_log=str(out / "tb"))
+        model = algo.load(str(path), env=train_env, tensorboard_log=str(out / "tb"))
         with open(str(path)[: -len(".zip")] + "_rng.pkl", "rb") as handle:
             state = pickle.load(handle)
         random.setstate(state["python"])
@@ -375,7 +424,7 @@ def train(
     callbacks = build_callbacks(out, entry, eval_env, n_envs)
     if remaining > 0:
         model.learn(total_timesteps=remaining, callback=callbacks, progress_bar=progress,
-                    reset_num_timesteps=reset, tb_log_name="ppo")  # fmt: skip
+                    reset_num_timesteps=reset, tb_log_name=entry["algo"])  # fmt: skip
     save_with_stats(model, out / "model", out)
     save_checkpoint(model, out, model.num_timesteps)
     train_env.close()

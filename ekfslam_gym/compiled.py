@@ -98,6 +98,16 @@ KERNELS: dict[str, tuple[str, str, str]] = {
         "fill_observation",
         f"void(f4[::1], i8[::1], {_F8_1}, {_F8_1}, {_F8_2}, b1[::1], f8, {_F8_2}, {_F8_1}, {_F8_2}, {_F8_1}, f8)",
     ),
+    "mark_walls": (
+        "ekfslam_gym.envs.kernels",
+        "mark_walls",
+        f"i8({_F8_2}, {_F8_1}, {_F8_1}, f8, {_F8_1}, {_F8_1}, f8)",
+    ),
+    "fill_belief_image": (
+        "ekfslam_gym.envs.kernels",
+        "fill_belief_image",
+        f"void(f4[::1], i8, {_F8_2}, {_F8_2}, {_F8_1}, {_F8_1}, {_F8_2}, b1[::1], f8, f8)",
+    ),
     "step_metrics": (
         "ekfslam_gym.envs.kernels",
         "step_metrics",

@@ -10,6 +10,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 EXPECTED = {
     "association.py": "jcbc / known",
+    "belief_image.py": "dict + belief_image",
     "consistency.py": "median ANEES",
     "decisions.py": "time per act() call",
     "ekf.py": "landmarks",

@@ -135,3 +135,113 @@ def test_a_primitives_policy_trains_and_evaluates_on_its_own_env_settings(tmp_pa
     status = evaluate.main(["--agent", "ppo,circle", "--model", str(out / "model.zip"), "--seeds", "20000",
                             "--json", "--no-progress"])  # fmt: skip
     assert status == 0
+
+
+TINY = ["n_steps=64", "batch_size=64", "n_epochs=1", "eval_freq=0", "checkpoint_freq=0"]
+
+
+def test_the_belief_cnn_config_trains_and_evaluates(tmp_path):
+    """configs/ppo_belief_cnn.yaml: MultiInputPolicy over the belief image through agents.extractors.BeliefCNN
+    (named by its dotted path in the config), the image left out of VecNormalize."""
+    from agents import PPOAgent
+    from agents.extractors import BeliefCNN
+    from ekfslam_gym.cli import evaluate
+
+    out = tmp_path / "cnn"
+    train.main(["--config", "configs/ppo_belief_cnn.yaml", "--timesteps", "256", "--n-envs", "1", "--out",
+                str(out), "--no-progress", "--hyperparams", *TINY])  # fmt: skip
+    agent = PPOAgent(out / "model.zip")
+    assert type(agent.model).__name__ == "PPO" and not agent.recurrent
+    assert isinstance(agent.model.policy.features_extractor, BeliefCNN)
+    assert agent.model.observation_space["belief_image"].shape == (3, 16, 16)
+    assert "belief_image" not in agent.vecnormalize.obs_rms  # the image is left as it is, in [0, 1]
+    record = train.read_run(out)[2]
+    assert record["policy_kwargs"]["features_extractor_class"] == "agents.extractors.BeliefCNN"
+    status = evaluate.main(["--agent", "ppo", "--model", str(out / "model.zip"), "--seeds", "20000",
+                            "--max-episode-steps", "4", "--json", "--no-progress"])  # fmt: skip
+    assert status == 0
+
+
+def test_the_recurrent_config_trains_and_evaluates_with_its_lstm_state(tmp_path):
+    """configs/ppo_lstm.yaml: train_settings algo ppo_lstm trains sb3-contrib's RecurrentPPO; the ppo agent loads
+    it as such from the record beside the model, carries the LSTM state across steps and resets it at reset."""
+    pytest.importorskip("sb3_contrib")
+    import gymnasium as gym
+
+    from agents import PPOAgent
+    from agents.ppo import saved_algo
+    from ekfslam_gym.cli import evaluate
+
+    out = tmp_path / "lstm"
+    train.main(["--config", "configs/ppo_lstm.yaml", "--timesteps", "256", "--n-envs", "1", "--out", str(out),
+                "--no-progress", "--hyperparams", *TINY, "policy_kwargs={lstm_hidden_size: 16}"])  # fmt: skip
+    assert train.read_run(out)[2]["algo"] == "ppo_lstm"
+    agent = PPOAgent(out / "model.zip")
+    assert type(agent.model).__name__ == "RecurrentPPO" and agent.recurrent
+    assert saved_algo(out / "model.zip") == "ppo_lstm"  # also without the record: from the saved policy class
+
+    env = gym.make("EKFSLAM-v0", action={"kind": "primitives", "hold": 10}, max_episode_steps=50)
+    observation, _ = env.reset(seed=20000)
+    agent.reset(env, seed=20000)
+    assert agent._state is None and agent._episode_start.all()
+    first = agent.act(observation)
+    state = agent._state
+    assert state is not None and not agent._episode_start.any()
+    observation, *_ = env.step(first)
+    agent.act(observation)
+    assert not np.array_equal(agent._state[0], state[0])  # carried forward, not restarted
+    # The same as sb3-contrib's own loop: predict with the state and episode_start, on normalised observations.
+    observation, _ = env.reset(seed=20000)
+    agent.reset(env, seed=20000)
+    states, starts, actions, expected = None, np.ones((1,), dtype=bool), [], []
+    for _ in range(4):
+        action = agent.act(observation)
+        normalised = agent.vecnormalize.normalize_obs(observation)
+        reference, states = agent.model.predict(
+            normalised, state=states, episode_start=starts, deterministic=True
+        )
+        starts = np.zeros((1,), dtype=bool)
+        actions.append(int(action))
+        expected.append(int(reference))
+        observation, *_ = env.step(action)
+    assert actions == expected
+    agent.reset(env, seed=1)
+    assert agent._state is None and agent._episode_start.all()
+
+    status = evaluate.main(["--agent", "ppo", "--model", str(out / "model.zip"), "--seeds", "20000",
+                            "--max-episode-steps", "5", "--json", "--no-progress"])  # fmt: skip
+    assert status == 0
+
+
+def test_algo_settings_are_checked_and_dotted_classes_resolved(tmp_path):
+    import torch
+
+    from agents.extractors import BeliefCNN
+
+    config = tmp_path / "c.yaml"
+    config.write_text("EKFSLAM-v0: {n_steps: 64}\ntrain_settings: {EKFSLAM-v0: {algo: a2c}}\n")
+    with pytest.raises(SystemExit, match="algo must be one of"):
+        train.load_entry(config, "EKFSLAM-v0")
+    config.write_text(
+        "EKFSLAM-v0: {n_steps: 64}\ntrain_settings: {EKFSLAM-v0: {algo: ppo_lstm, pretrain: true}}\n"
+    )
+    with pytest.raises(SystemExit, match="supports algo ppo only"):
+        train.load_entry(config, "EKFSLAM-v0")
+    assert train.load_entry(train.Path("configs/ppo.yaml"), "EKFSLAM-v0")["algo"] == "ppo"
+    assert train.load_entry(train.Path("configs/ppo_lstm.yaml"), "EKFSLAM-Large-v0")["algo"] == "ppo_lstm"
+    from agents.training import resolve_policy_kwargs
+
+    resolved = resolve_policy_kwargs(
+        {
+            "features_extractor_class": "agents.extractors.BeliefCNN",
+            "activation_fn": "nn.ReLU",
+            "net_arch": [8],
+        }
+    )
+    assert resolved == {
+        "features_extractor_class": BeliefCNN,
+        "activation_fn": torch.nn.ReLU,
+        "net_arch": [8],
+    }
+    with pytest.raises(ValueError, match="cannot import"):
+        resolve_policy_kwargs({"features_extractor_class": "agents.extractors.Missing"})

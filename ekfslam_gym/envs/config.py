@@ -174,6 +174,12 @@ class ObservationConfig:
     left" from a robot-centred window far more easily than from a world-fixed map plus the pose.
     coarse_grid, coarse_extent: a second, coarser and wider window of the same memory (each cell the fraction
     looked at), so the far side of the world is not out of sight; coarse_grid 0 disables it.
+    belief_image (``dict`` only, off by default): the Dict observation gains ``belief_image``, a float32
+    (3, belief_size, belief_size) image in [0, 1] reaching belief_extent m to each side, centred on the pose
+    estimate and turned with its heading like the coverage window, read from the belief alone: channel 0 the
+    coverage memory, 1 the seen landmarks' estimates (each in its cell, weighted by its certainty
+    1 / (1 + sqrt(tr Sigma_jj) / cell size)), 2 a memory of where the wall scan has hit a wall (placed at the
+    pose estimate). For a CNN (``agents.extractors.BeliefCNN``); ``ekfslam_gym.envs.observation`` has details.
     """
 
     kind: str = "box"
@@ -183,6 +189,9 @@ class ObservationConfig:
     memory_resolution: float = 0.5
     coarse_grid: int = 5
     coarse_extent: float = 20.0
+    belief_image: bool = False
+    belief_size: int = 16
+    belief_extent: float = 8.0
 
     def __post_init__(self) -> None:
         _require(self.kind in ("box", "dict"), "observation.kind", "must be box|dict", self.kind)
@@ -192,6 +201,16 @@ class ObservationConfig:
         _positive("observation.memory_resolution", self.memory_resolution)
         _integer("observation.coarse_grid", self.coarse_grid, 0)
         _positive("observation.coarse_extent", self.coarse_extent)
+        _require(isinstance(self.belief_image, bool), "observation.belief_image", "must be a bool", self.belief_image)  # fmt: skip
+        _require(
+            not self.belief_image or self.kind == "dict",
+            "observation.belief_image",
+            f"needs observation.kind dict (a (C, H, W) image has no place in a flat box), kind is {self.kind!r}:"
+            " must be false",
+            self.belief_image,
+        )
+        _integer("observation.belief_size", self.belief_size, 2)
+        _positive("observation.belief_extent", self.belief_extent)
 
 
 ACTION_KINDS = ("velocity", "primitives", "waypoint")

@@ -17,7 +17,7 @@ from ..sim.sensor import Readings
 from ..sim.world import World
 from .actions import clipped_velocity, make_interface
 from .config import EnvConfig
-from .observation import ObservationLayout, make_memory, observation_constants
+from .observation import ObservationLayout, make_memory, observation_constants, observation_space
 from .rewards import REWARD_TERMS
 
 ODOMETERS = {"odometry": "odometry", "wheels": "wheel_odometry", "velocity": "velocity_odometry"}
@@ -54,6 +54,16 @@ class EKFSLAMEnv(gym.Env):
     ``ObservationLayout``) says where each part lies, for both kinds; ``ekfslam_gym.envs.observation``
     describes every entry and its normalisation. The time-left entry of ``globals`` falls from 1 at reset to
     exactly 0 at the step limit in force (see Episode End).
+
+    Memory and a map, for a convolutional policy: with ``observation = {"kind": "dict", "belief_image": True}``
+    (off by default; a ``box`` observation with it raises ``ValueError``) the Dict gains ``belief_image``,
+    ``Box(0, 1, (3, S, S), float32)``, S = ``observation.belief_size`` (16) cells reaching
+    ``observation.belief_extent`` m (8) to each side, centred on the pose estimate and turned with its heading
+    like the coverage window. Channel 0 is the coverage memory; 1 the seen landmarks' estimates, each in its
+    cell valued by its certainty 1 / (1 + sqrt(tr Sigma_jj) / cell size); 2 the walls the scan has hit, kept in
+    a wall memory (``wall_memory``, laid out like ``coverage_memory``) that every control step marks at the
+    scan's endpoints placed from the pose estimate. All of it comes from the belief, never from the true pose,
+    landmarks or walls; ``agents.extractors.BeliefCNN`` reads it (``configs/ppo_belief_cnn.yaml``).
 
     ## Rewards
     The sum of the terms in ``info["reward_terms"]``, those with a non-zero weight in ``reward`` (the names and
@@ -137,7 +147,7 @@ class EKFSLAMEnv(gym.Env):
 
     After ``reset``, agents and evaluation read the belief through public, read-only views: ``filter``
     (``mean``, ``cov``, ``observed``, ...), ``observation_layout``, ``bounds``, ``coverage_memory``,
-    ``elapsed_steps``; ``world`` and ``true_landmarks`` are privileged (baselines and evaluation only).
+    ``wall_memory`` (with the belief image), ``elapsed_steps``; ``world`` and ``true_landmarks`` are privileged (baselines and evaluation only).
 
     ## Registered Configurations
     - ``EKFSLAM-v0``: 20 x 20 m arena, 30 landmarks, 500 steps of 0.1 s.
@@ -179,9 +189,15 @@ class EKFSLAMEnv(gym.Env):
         # One control step per env step (the default): step() takes its direct path, as fast as before.
         self._single = config.action.kind == "velocity" and config.action.steps == 1
         self._hold = config.action.steps
-        self.observation_space = self._layout.space(config.observation.kind)
+        self.observation_space = observation_space(self._layout, config.observation)
         self._obs = np.zeros(self._layout.size, dtype=np.float32)
         self._flat = config.observation.kind == "box"
+        # The belief image (observation.belief_image): its buffer, filled with the observation; nothing of it
+        # runs when off.
+        self._belief_image = config.observation.belief_image
+        if self._belief_image:
+            size = config.observation.belief_size
+            self._image = np.zeros((3, size, size), dtype=np.float32)
         self._constants = observation_constants(config.observation, config.sensor)
         # The reward hooks of the terms with a non-zero weight, in REWARD_TERMS order: (name, weight, hook).
         self._reward_hooks = tuple(
@@ -232,6 +248,9 @@ class EKFSLAMEnv(gym.Env):
         self._bounds = np.asarray(layout.bounds, dtype=np.float64)
         self._true_landmarks = np.ascontiguousarray(layout.landmarks, dtype=np.float64)
         self._memory = make_memory(self._bounds, cfg.observation.memory_resolution)
+        if self._belief_image:
+            self._walls = make_memory(self._bounds, cfg.observation.memory_resolution)
+            self._beam_angles = np.ascontiguousarray(self._world.sensor.beam_angles, dtype=np.float64)
         self._last_seen = np.full(layout.n_landmarks, -1, dtype=np.int64)
         known = f.association == "known"
         self._slot_truth = np.arange(layout.n_landmarks) if known else np.full(layout.n_landmarks, -1)
@@ -271,6 +290,8 @@ class EKFSLAMEnv(gym.Env):
         self._odometry = np.zeros(2 if f.motion_model == "velocity" else 3)
         self._odometry_cov = np.zeros((self._odometry.size, self._odometry.size))
         self._newly_covered = self._mark_and_trail()
+        if self._belief_image:
+            self._mark_walls()
         nees, rmse, _, self._worst_variance, seen, _, _ = self._step_metrics(read)
         info = self._info({"info_gain": 0.0}, nees, rmse, seen, 0.0, 0.0)
         if self.render_mode == "human":
@@ -369,6 +390,8 @@ class EKFSLAMEnv(gym.Env):
 
         self._prev_log_det, self._log_det = self._log_det, ekf.log_det
         self._newly_covered = self._mark_and_trail()
+        if self._belief_image:
+            self._mark_walls()
         terms = self._rewards()
         reward = sum(terms.values(), 0.0)
         nees, rmse, closures, self._worst_variance, seen, truth_gain, belief_gain = self._step_metrics(read)
@@ -546,17 +569,39 @@ class EKFSLAMEnv(gym.Env):
             self._trail_est.append((float(mean[0]), float(mean[1])))
         return new
 
+    def _mark_walls(self) -> None:
+        """Mark the wall memory from this control step's scan (the belief image's wall channel), the endpoints
+        placed at the pose estimate; the scan is kept for the observation (nothing moves in between)."""
+        self._scan = scan = self._world.scan()
+        sensor = self.config.sensor
+        compiled.mark_walls(
+            self._walls, self._belief[0], self._bounds, self.config.observation.memory_resolution, scan,
+            self._beam_angles, sensor.scan_max_range,
+        )  # fmt: skip
+
     def _observation(self):
         mean, cov, observed, pose_given_map = self._belief
         time_left = max(0.0, 1.0 - self._steps / self._max_steps)
+        scan = self._scan if self._belief_image else self._world.scan()
         compiled.fill_observation(
             self._obs, self._layout.offsets, self._constants, mean, cov, observed, self._log_det, pose_given_map,
-            self._world.scan(), self._memory, self._bounds, time_left,
+            scan, self._memory, self._bounds, time_left,
         )  # fmt: skip
+        if self._belief_image:
+            o = self.config.observation
+            compiled.fill_belief_image(
+                self._image.reshape(-1), o.belief_size, self._memory, self._walls, self._bounds, mean, cov,
+                observed, o.memory_resolution, o.belief_extent,
+            )  # fmt: skip
         return self._observation_out()
 
     def _observation_out(self):
-        return self._obs.copy() if self._flat else self._layout.split(self._obs)
+        if self._flat:
+            return self._obs.copy()
+        observation = self._layout.split(self._obs)
+        if self._belief_image:
+            observation["belief_image"] = self._image.copy()
+        return observation
 
     # ------------------------------------------------------------------ access for agents and evaluation
     @property
@@ -602,6 +647,15 @@ class EKFSLAMEnv(gym.Env):
         ``observation.memory_resolution`` m per cell, 1 = looked at. The coverage windows are read from it."""
         self._require_reset()
         return _read_only(self._memory)
+
+    @property
+    def wall_memory(self) -> np.ndarray:
+        """Where the wall scan has hit a wall, read-only, laid out like ``coverage_memory`` (1 = a wall seen
+        there, placed at the pose estimate); kept only with ``observation.belief_image`` (ValueError without)."""
+        self._require_reset()
+        if not self._belief_image:
+            raise ValueError("the wall memory is kept only with observation.belief_image")
+        return _read_only(self._walls)
 
     @property
     def elapsed_steps(self) -> int:

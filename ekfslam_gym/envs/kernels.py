@@ -1,5 +1,5 @@
-"""The env's compiled kernels: the observation (one call writes the whole flat vector), the coverage memory, and
-the per-step metrics. Compiled because the env is stepped millions of times and each numpy call costs
+"""The env's compiled kernels: the observation (one call writes the whole flat vector), the coverage memory, the
+belief image and its wall memory (``observation.belief_image``), and the per-step metrics. Compiled because the env is stepped millions of times and each numpy call costs
 microseconds; delivered through ``ekfslam_gym.compiled`` (ahead of time when installed, else numba's JIT).
 """
 
@@ -13,6 +13,9 @@ from numba import njit
 from ..angles import compiled_wrap_angle as wrap_angle
 from ..filter.kernels import det3
 from .observation_codes import (
+    BELIEF_COVERAGE,
+    BELIEF_LANDMARKS,
+    BELIEF_WALLS,
     CLIP,
     COARSE_EXTENT,
     COARSE_SAMPLES,
@@ -192,6 +195,106 @@ def fill_observation(
             out, offsets[COVERAGE_COARSE], memory, bounds, resolution, x, y, c, s, coarse_grid,
             constants[COARSE_EXTENT], COARSE_SAMPLES,
         )  # fmt: skip
+
+
+@njit(cache=True)
+def mark_walls(walls, pose, bounds, resolution, scan, beam_angles, scan_max_range):
+    """Set the wall-memory cells holding the endpoints of the scan's beams that hit a wall (a distance below
+    ``scan_max_range``), each endpoint placed from ``pose``, the pose *estimate*: the memory is the belief's
+    picture of the walls, drawn where the robot believes it stands. Returns how many cells were newly marked.
+
+    ``walls`` is laid out like the coverage memory (rows along y from ``bounds``' corner, ``resolution`` m per
+    cell); beam i points at heading + ``beam_angles[i]``, as the sensor casts it. Endpoints outside the world
+    are dropped.
+    """
+    rows, cols = walls.shape
+    per_metre = 1.0 / resolution  # as ``_window`` reads the memory, so a cell is marked where it is read
+    marked = 0
+    for i in range(scan.shape[0]):
+        distance = scan[i]
+        if not distance < scan_max_range:
+            continue
+        angle = pose[2] + beam_angles[i]
+        fc = (pose[0] + distance * math.cos(angle) - bounds[0]) * per_metre
+        fr = (pose[1] + distance * math.sin(angle) - bounds[1]) * per_metre
+        if 0.0 <= fr < rows and 0.0 <= fc < cols:
+            row, col = int(fr), int(fc)
+            if walls[row, col] == 0.0:
+                walls[row, col] = 1.0
+                marked += 1
+    return marked
+
+
+@njit(cache=True)
+def _belief_windows(out, size, coverage, walls, bounds, resolution, x, y, c, s, extent, samples):
+    """The coverage and wall channels in one pass over the sample points (each point read in both memories):
+    a coverage cell is the mean of its samples x samples points, as ``_window``'s, a wall cell the largest (a wall
+    a sample wide still reads 1); outside the world both read 1. Same cell layout as ``_window``."""
+    rows, cols = coverage.shape
+    cell = 2.0 * extent / size
+    step = cell / samples
+    per_metre = 1.0 / resolution
+    o_coverage = BELIEF_COVERAGE * size * size
+    o_walls = BELIEF_WALLS * size * size
+    for row in range(size):
+        for col in range(size):
+            total = 0.0
+            largest = 0.0
+            for i in range(samples):
+                left = extent - row * cell - (i + 0.5) * step
+                for j in range(samples):
+                    forward = -extent + col * cell + (j + 0.5) * step
+                    fc = (x + c * forward - s * left - bounds[0]) * per_metre
+                    fr = (y + s * forward + c * left - bounds[1]) * per_metre
+                    if 0.0 <= fr < rows and 0.0 <= fc < cols:
+                        r, k = int(fr), int(fc)
+                        total += coverage[r, k]
+                        if walls[r, k] > largest:
+                            largest = walls[r, k]
+                    else:
+                        total += 1.0
+                        largest = 1.0
+            out[o_coverage + row * size + col] = total / (samples * samples)
+            out[o_walls + row * size + col] = largest
+
+
+@njit(cache=True)
+def fill_belief_image(out, size, coverage, walls, bounds, mean, cov, observed, resolution, extent):
+    """Write the belief image, (3, size, size) float32 flattened C-order into ``out``, from the belief alone.
+
+    The window is centred on the pose estimate mean[:3] and turned with its heading, reaching ``extent`` m to
+    each side, the cells laid out as ``_window``'s (row 0 furthest to the left, column 0 furthest behind).
+    Channel ``BELIEF_COVERAGE``: the coverage memory, each cell the mean of samples x samples points in it
+    (samples = ceil(cell / resolution), so every memory cell under it counts); ``BELIEF_WALLS``: the wall memory
+    of ``mark_walls``, each cell the largest of its points (a wall is thin); both 1 outside the world
+    (``_belief_windows``, one pass for both).
+    ``BELIEF_LANDMARKS``: each seen landmark's estimate in the cell that holds it, valued by its certainty
+    1 / (1 + sqrt(tr Sigma_jj) / cell): 1/2 when the expected position error (the root of the trace of the
+    marginal 2x2 covariance, Thrun, Burgard & Fox ch. 3) is one cell, near 1 when far below it; the largest
+    where several share a cell. Nothing here reads the true pose, map or walls.
+    """
+    x, y, theta = mean[0], mean[1], mean[2]
+    c, s = math.cos(theta), math.sin(theta)
+    cell = 2.0 * extent / size
+    samples = max(1, int(math.ceil(cell / resolution - 1e-9)))
+    area = size * size
+    _belief_windows(out, size, coverage, walls, bounds, resolution, x, y, c, s, extent, samples)
+    o = BELIEF_LANDMARKS * area
+    for i in range(area):
+        out[o + i] = 0.0
+    for j in range(observed.shape[0]):
+        if not observed[j]:
+            continue
+        lj = 3 + 2 * j
+        dx = mean[lj] - x
+        dy = mean[lj + 1] - y
+        row = math.floor((extent - (-s * dx + c * dy)) / cell)
+        col = math.floor((c * dx + s * dy + extent) / cell)
+        if 0 <= row < size and 0 <= col < size:
+            certainty = 1.0 / (1.0 + math.sqrt(max(cov[lj, lj] + cov[lj + 1, lj + 1], 0.0)) / cell)
+            k = o + int(row) * size + int(col)
+            if certainty > out[k]:
+                out[k] = certainty
 
 
 @njit(cache=True)

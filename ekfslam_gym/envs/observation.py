@@ -26,6 +26,28 @@ coarse            fraction of it looked at, so that beyond the fine window the r
 
 Everything is computed by one compiled kernel writing into a preallocated vector: the env is stepped millions
 of times and each numpy call costs microseconds.
+
+The belief image (``observation.belief_image``, Dict observations only, off by default) is a further key,
+``belief_image``: float32 (3, S, S) in [0, 1], S = ``belief_size`` (16), a robot-centred window reaching
+``belief_extent`` m (8) to each side, centred on the pose *estimate* and turned with its heading exactly like
+the coverage window (row 0 furthest to the left, column 0 furthest behind). It is memory and a map for a
+convolutional policy (``agents.extractors.BeliefCNN``), drawn from the belief alone, never from the true pose,
+landmarks or walls:
+
+======= ===============================================================================================
+channel contents
+======= ===============================================================================================
+0       the coverage memory as above, each cell the fraction of it looked at (1 outside the world)
+1       every seen landmark's *estimate* in the cell holding it, valued by its certainty
+        1 / (1 + sqrt(tr Sigma_jj) / cell size) (1/2 when the expected position error is one cell; the
+        largest where several share a cell); 0 elsewhere
+2       walls as the wall scan has seen them: a wall memory laid out like the coverage memory, where every
+        control step marks the cells of the scan's endpoints that hit a wall before ``scan_max_range``,
+        placed from the pose *estimate*; each image cell 1 if any memory cell under it holds a wall (and
+        outside the world), else 0
+======= ===============================================================================================
+
+Computed by its own compiled kernel only when enabled; with it off nothing of it runs.
 """
 
 from __future__ import annotations
@@ -42,6 +64,7 @@ from gymnasium import spaces
 from ..sim.sensor import SensorParams
 from .config import ObservationConfig
 from .observation_codes import (
+    BELIEF_CHANNELS,
     CLIP,
     COARSE_EXTENT,
     GRID_EXTENT,
@@ -131,6 +154,20 @@ class ObservationLayout:
     def split(self, flat: np.ndarray) -> dict[str, np.ndarray]:
         """The Dict observation of a flat one (copies, in the order of the parts)."""
         return {name: flat[s].copy() for name, s in self.slices.items()}
+
+
+def belief_image_space(observation: ObservationConfig) -> spaces.Box:
+    """The ``belief_image`` key's space: float32 (channels, belief_size, belief_size) in [0, 1]."""
+    size = observation.belief_size
+    return spaces.Box(0.0, 1.0, shape=(BELIEF_CHANNELS, size, size), dtype=np.float32)
+
+
+def observation_space(layout: ObservationLayout, observation: ObservationConfig) -> spaces.Space:
+    """The env's observation space: the layout's Box or Dict, plus ``belief_image`` when it is enabled."""
+    space = layout.space(observation.kind)
+    if observation.belief_image:
+        space = spaces.Dict({**space.spaces, "belief_image": belief_image_space(observation)})
+    return space
 
 
 def observation_constants(observation: ObservationConfig, sensor: SensorParams) -> np.ndarray:

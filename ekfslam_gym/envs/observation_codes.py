@@ -10,3 +10,7 @@ PARTS = ("pose", "pose_cov", "landmarks", "globals", "scan", "coverage", "covera
 POSE, POSE_COV, LANDMARKS, GLOBALS, SCAN, COVERAGE, COVERAGE_COARSE = range(len(PARTS))
 # Positions in the array of ``observation_constants`` (the kernel's scales and window extents).
 MAX_RANGE, SCAN_MAX_RANGE, MEMORY_RESOLUTION, GRID_EXTENT, COARSE_EXTENT = range(5)
+
+# The belief image's channels (``observation.belief_image``): coverage memory, landmark estimates, seen walls.
+BELIEF_CHANNELS = 3
+BELIEF_COVERAGE, BELIEF_LANDMARKS, BELIEF_WALLS = range(BELIEF_CHANNELS)
