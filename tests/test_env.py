@@ -613,6 +613,28 @@ def test_the_step_limit_survives_pickling_and_rebuilding_from_the_spec():
         assert run_to_truncation(rebuilt, 20)[1] == [False] * 11 + [True]
 
 
+def test_a_rebuilt_step_limit_pickles_when_gymnasiums_time_limit_is_replaced(monkeypatch):
+    """rl-zoo3, once imported, swaps gymnasium's TimeLimit for a subclass of its own everywhere gym.make and
+    pickle look it up; the env rebuilt for a config step limit must still pickle (it used to fail then)."""
+    import gymnasium.envs.registration as registration
+    import gymnasium.wrappers
+    import gymnasium.wrappers.common as common
+
+    import ekfslam_gym.envs.horizon  # noqa: F401  (imported before the swap, as when an env was made earlier)
+
+    class PatchedTimeLimit(common.TimeLimit):
+        pass
+
+    PatchedTimeLimit.__module__, PatchedTimeLimit.__qualname__ = common.__name__, "TimeLimit"
+    for module in (gymnasium.wrappers, common, registration):
+        monkeypatch.setattr(module, "TimeLimit", PatchedTimeLimit, raising=False)
+    env = gym.make("EKFSLAM-v0", config={"max_episode_steps": 12})
+    assert time_limits(env) == [12]
+    env.reset(seed=0)
+    clone = pickle.loads(pickle.dumps(env))
+    assert [clone.step(np.zeros(2, dtype=np.float32))[3] for _ in range(12)] == [False] * 11 + [True]
+
+
 def test_two_different_step_limits_are_an_error_and_no_time_limit_leaves_the_env_its_own():
     with pytest.raises(ValueError, match="two step limits"):
         gym.make("EKFSLAM-v0", max_episode_steps=30, config={"max_episode_steps": 40})

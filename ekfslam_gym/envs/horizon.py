@@ -43,7 +43,9 @@ class HorizonSync(gym.Wrapper, gym.utils.RecordConstructorArgs):
                     "config; give one"
                 )
             if own_given:
-                env = TimeLimit(env.env, own)
+                # The same class as gym.make's: rl-zoo3, once imported, replaces gymnasium's TimeLimit by its own
+                # subclass, and a base TimeLimit would then no longer pickle (its name resolves to the subclass).
+                env = type(env)(env.env, own)
             else:
                 base.set_max_episode_steps(limit)
         gym.Wrapper.__init__(self, env)
