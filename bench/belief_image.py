@@ -21,6 +21,7 @@ import statistics  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+from env import steps_per_second  # noqa: E402  (bench/env.py, beside this script)
 
 from ekfslam_gym.envs import EKFSLAMEnv  # noqa: E402
 
@@ -29,17 +30,6 @@ VARIANTS = {
     "dict": {"kind": "dict"},
     "dict + belief_image": {"kind": "dict", "belief_image": True},
 }
-
-
-def steps_per_second(env: EKFSLAMEnv, actions: np.ndarray, clock) -> float:
-    env.reset(seed=0)
-    step = env.step
-    start = clock()
-    for action in actions:
-        _, _, terminated, truncated, _ = step(action)
-        if terminated or truncated:
-            env.reset()
-    return len(actions) / (clock() - start)
 
 
 def main(argv=None) -> None:
@@ -55,12 +45,12 @@ def main(argv=None) -> None:
     actions = np.random.default_rng(0).uniform(-1, 1, (args.steps, 2)).astype(np.float32)
     envs = {name: EKFSLAMEnv(observation=observation) for name, observation in VARIANTS.items()}
     for env in envs.values():  # compile and warm up outside the timing
-        steps_per_second(env, actions[:50], time.perf_counter)
+        steps_per_second(env, actions[:50], clock=time.perf_counter)
     results = {name: {"wall": [], "cpu": []} for name in envs}
     for _ in range(args.repeats):
         for name, env in envs.items():
-            results[name]["wall"].append(steps_per_second(env, actions, time.perf_counter))
-            results[name]["cpu"].append(steps_per_second(env, actions, time.process_time))
+            results[name]["wall"].append(steps_per_second(env, actions, clock=time.perf_counter))
+            results[name]["cpu"].append(steps_per_second(env, actions, clock=time.process_time))
     base = {clock: statistics.median(results["dict"][clock]) for clock in ("wall", "cpu")}
     print(
         f"EKFSLAM-v0, {args.steps} steps x {args.repeats} repeats (median), ratio to the Dict without the image"
