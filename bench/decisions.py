@@ -1,6 +1,6 @@
 """Benchmark: mean wall-clock time of one ``act()`` call (one decision) of the scripted agents in EKFSLAM-v0.
 
-    OPENBLAS_NUM_THREADS=1 python bench/decisions.py [--agents frontier,greedy,lawnmower,circle] [--seeds 3]
+    OPENBLAS_NUM_THREADS=1 python bench/decisions.py [--agents frontier,greedy,greedy2,lawnmower,circle] [--seeds 3]
         [--steps 200] [--env-id EKFSLAM-v0] [--smoke]
 
 Each agent drives ``--seeds`` seeded episodes of ``--steps`` steps; only its ``act()`` calls are timed (the env's
@@ -54,7 +54,7 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--agents", default="frontier,greedy,lawnmower,circle")
+    parser.add_argument("--agents", default="frontier,greedy,greedy2,lawnmower,circle")
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--steps", type=int, default=200)
