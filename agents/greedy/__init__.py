@@ -47,7 +47,14 @@ The cost is ``len(primitives) + len(primitives)^2`` rollouts a plan instead of `
 """
 
 from .agent import GreedyInfoGainAgent, GreedyLookaheadAgent
-from .rollout import DEFAULT_PRIMITIVES, discovery_nats, expected_readings, primitive_controls, rollout_gain
+from .rollout import (
+    DEFAULT_PRIMITIVES,
+    discovery_nats,
+    expected_readings,
+    primitive_controls,
+    rollout,
+    rollout_gain,
+)
 
 __all__ = [
     "DEFAULT_PRIMITIVES",
@@ -56,5 +63,6 @@ __all__ = [
     "discovery_nats",
     "expected_readings",
     "primitive_controls",
+    "rollout",
     "rollout_gain",
 ]
