@@ -2,8 +2,9 @@
 
 Baselines: ``random`` (uniform actions), ``circle`` (a fixed circle, a sanity floor), ``lawnmower`` (a
 coverage sweep of the world's bounds), ``greedy`` (D-optimal information gain over motion primitives, the
-classic active-SLAM baseline), ``frontier`` (nearest-frontier exploration, Yamauchi 1997, the exploration
-literature's baseline), and ``ppo`` (a saved stable-baselines3 policy; needs the ``train`` extra).
+classic active-SLAM baseline; ``greedy2`` is the same planner looking two primitives ahead), ``frontier``
+(nearest-frontier exploration, Yamauchi 1997, the exploration literature's baseline), and ``ppo`` (a saved
+stable-baselines3 policy; needs the ``train`` extra).
 ``make_agent(name, **kwargs)`` builds one by name, as ``python -m ekfslam_gym.evaluate --agent NAME`` does.
 """
 
@@ -14,7 +15,7 @@ from typing import Any
 from .base import Agent, clip_action, wall_scan
 from .baselines import CircleAgent, LawnmowerAgent, RandomAgent
 from .frontier import FrontierAgent
-from .greedy import GreedyInfoGainAgent
+from .greedy import GreedyInfoGainAgent, GreedyLookaheadAgent
 from .ppo import PPOAgent
 
 AGENTS: dict[str, type[Agent]] = {
@@ -22,6 +23,7 @@ AGENTS: dict[str, type[Agent]] = {
     "circle": CircleAgent,
     "lawnmower": LawnmowerAgent,
     "greedy": GreedyInfoGainAgent,
+    "greedy2": GreedyLookaheadAgent,
     "frontier": FrontierAgent,
     "ppo": PPOAgent,
 }
@@ -44,6 +46,7 @@ __all__ = [
     "CircleAgent",
     "FrontierAgent",
     "GreedyInfoGainAgent",
+    "GreedyLookaheadAgent",
     "LawnmowerAgent",
     "PPOAgent",
     "RandomAgent",

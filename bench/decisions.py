@@ -1,11 +1,12 @@
 """Benchmark: mean wall-clock time of one ``act()`` call (one decision) of the scripted agents in EKFSLAM-v0.
 
-    OPENBLAS_NUM_THREADS=1 python bench/decisions.py [--agents frontier,greedy,lawnmower,circle] [--seeds 3]
+    OPENBLAS_NUM_THREADS=1 python bench/decisions.py [--agents frontier,greedy,greedy2,lawnmower,circle] [--seeds 3]
         [--steps 200] [--env-id EKFSLAM-v0] [--smoke]
 
 Each agent drives ``--seeds`` seeded episodes of ``--steps`` steps; only its ``act()`` calls are timed (the env's
 steps and the agent's ``reset`` are not). A first, untimed episode warms up numba's compiled kernels, so the
-figures are the steady cost per decision, not the compilation.
+figures are the steady cost per decision, not the compilation. The last column is each agent's mean over the
+first agent's.
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--agents", default="frontier,greedy,lawnmower,circle")
+    parser.add_argument("--agents", default="frontier,greedy,greedy2,lawnmower,circle")
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--steps", type=int, default=200)
@@ -63,11 +64,14 @@ def main(argv=None) -> None:
     if args.smoke:
         args.seeds, args.steps = 1, 20
     print(f"{args.env_id}: {args.seeds} seeds x {args.steps} steps, time per act() call")
-    print(f"{'agent':<10} {'mean µs':>9} {'median µs':>10} {'p99 µs':>9} {'calls/s':>9}")
+    print(f"{'agent':<10} {'mean µs':>9} {'median µs':>10} {'p99 µs':>9} {'calls/s':>9} {'mean / first':>13}")
+    first = None
     for name in args.agents.split(","):
         t = act_times(name.strip(), args.env_id, args.seeds, args.steps) * 1e6
+        first = t.mean() if first is None else first
         print(
             f"{name:<10} {t.mean():9.1f} {np.median(t):10.1f} {np.percentile(t, 99):9.1f} {1e6 / t.mean():9.0f}"
+            f" {t.mean() / first:13.2f}"
         )
 
 

@@ -57,7 +57,7 @@ def test_planners_run_in_the_other_layouts(name, env_id):
 
 
 def test_make_agent_knows_every_agent_and_rejects_others():
-    assert set(BASELINES) | {"ppo"} == set(AGENTS)
+    assert set(BASELINES) | {"ppo", "greedy2"} == set(AGENTS)
     assert isinstance(make_agent("circle", radius=2.0), CircleAgent)
     with pytest.raises(ValueError, match="unknown agent"):
         make_agent("teleport")

@@ -36,16 +36,33 @@ the world's bounds. Turning in place is never vetoed, so there is always a way o
 Cost: ``len(primitives)`` rollouts of ``horizon`` predict/correct pairs every ``replan_every`` steps (and
 sooner if the new scan vetoes the primitive being executed), plus one shortest-path sweep of the grid: about
 5 ms a plan, 500 decisions/s in the default env, 200 in EKFSLAM-Large-v0 (120 landmarks).
+
+Two-step lookahead (``depth=2``, the ``greedy2`` agent): a one-step planner cannot value a turn by what driving
+after it would see. Each first primitive then also earns ``discount`` times the best score of a second
+primitive continued from where the first ends: its rollout starts from the first's rolled-forward belief (the
+same copy, predicted and corrected with the expected readings), its wall veto checks the combined path against
+the same scan, and its discovery counts only cells the first did not already sweep. The frontier term
+telescopes (the second measures progress from the first's end), and the frontier field is not recomputed.
+The cost is ``len(primitives) + len(primitives)^2`` rollouts a plan instead of ``len(primitives)``.
 """
 
-from .agent import GreedyInfoGainAgent
-from .rollout import DEFAULT_PRIMITIVES, discovery_nats, expected_readings, primitive_controls, rollout_gain
+from .agent import GreedyInfoGainAgent, GreedyLookaheadAgent
+from .rollout import (
+    DEFAULT_PRIMITIVES,
+    discovery_nats,
+    expected_readings,
+    primitive_controls,
+    rollout,
+    rollout_gain,
+)
 
 __all__ = [
     "DEFAULT_PRIMITIVES",
     "GreedyInfoGainAgent",
+    "GreedyLookaheadAgent",
     "discovery_nats",
     "expected_readings",
     "primitive_controls",
+    "rollout",
     "rollout_gain",
 ]

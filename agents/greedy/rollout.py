@@ -72,13 +72,12 @@ def expected_readings(
     return ids[visible], np.column_stack([ranges[visible], bearings[visible]])
 
 
-def rollout_gain(
+def rollout(
     ekf: Any, controls: np.ndarray, control_covs: np.ndarray, min_range: float, max_range: float, fov: float
-) -> float:
-    """Expected drop of log det Sigma (nats) after predicting with ``controls`` and correcting with the
-    expected readings at every step, on a copy of ``ekf`` (which is left untouched)."""
+) -> Any:
+    """A copy of ``ekf`` predicted with ``controls`` and corrected with the expected readings at every step
+    (``ekf`` is left untouched): the belief at the end of a primitive, which a second primitive continues."""
     sim = ekf.copy()
-    start = sim.log_det
     observed = np.asarray(sim.observed)
     landmarks = np.asarray(sim.landmarks)  # a view: zero-innovation updates leave the means where they are
     for control, cov in zip(controls, control_covs):
@@ -86,7 +85,15 @@ def rollout_gain(
         ids, z = expected_readings(np.asarray(sim.pose), landmarks, observed, min_range, max_range, fov)
         if ids.size:
             sim.correct(ids, z)
-    return float(start - sim.log_det)
+    return sim
+
+
+def rollout_gain(
+    ekf: Any, controls: np.ndarray, control_covs: np.ndarray, min_range: float, max_range: float, fov: float
+) -> float:
+    """Expected drop of log det Sigma (nats) after predicting with ``controls`` and correcting with the
+    expected readings at every step, on a copy of ``ekf`` (which is left untouched)."""
+    return float(ekf.log_det - rollout(ekf, controls, control_covs, min_range, max_range, fov).log_det)
 
 
 def discovery_nats(
