@@ -23,21 +23,11 @@ from agents.greedy import expected_readings, rollout_gain
 from agents.greedy.grid import distance_field, update_walls
 from agents.ppo import model_paths
 from ekfslam_gym.filter.models import range_bearing
+from tests.agent_runs import agent_actions
 
 
 def _run(agent, seed=0, steps=50, env_id="EKFSLAM-v0"):
-    env = gym.make(env_id, max_episode_steps=steps)
-    observation, _ = env.reset(seed=seed)
-    agent.reset(env, seed=seed)
-    actions = []
-    for _ in range(steps + 1):
-        action = agent.act(observation)
-        actions.append(action)
-        observation, _, terminated, truncated, _ = env.step(action)
-        if terminated or truncated:
-            break
-    env.close()
-    return np.array(actions), truncated
+    return agent_actions(agent, seed, steps, env_id, tries=steps + 1)
 
 
 @pytest.mark.parametrize("name", BASELINES)

@@ -12,21 +12,11 @@ from agents import AGENTS, GreedyInfoGainAgent, GreedyLookaheadAgent, make_agent
 from agents.greedy.grid import count_new
 from agents.greedy.rollout import rollout
 from agents.greedy.veto import scan_geometry, to_world
+from tests.agent_runs import agent_actions
 
 
 def _actions(agent, seed=3, steps=40, env_id="EKFSLAM-v0"):
-    env = gym.make(env_id, max_episode_steps=steps)
-    observation, _ = env.reset(seed=seed)
-    agent.reset(env, seed=seed)
-    actions = []
-    for _ in range(steps):
-        action = agent.act(observation)
-        actions.append(action)
-        observation, _, terminated, truncated, _ = env.step(action)
-        if terminated or truncated:
-            break
-    env.close()
-    return np.array(actions)
+    return agent_actions(agent, seed, steps, env_id)[0]
 
 
 @pytest.fixture
