@@ -201,26 +201,27 @@ def wheel_reading(
     chained motion as (left, right, slip), the wheel travels plus std * normals[:2], is the reading, and M[2, 2]
     only the modelled variance of the missing slide."""
     last = trace.shape[0] - 1
+    if params[4] != 0.0:
+        sensed_wheel_reading(
+            trace[0, 0], trace[0, 1], trace[0, 2], trace[last, 0], trace[last, 1], trace[last, 2], wheel_base,
+            contact_travel, params, normals, u, cov, u_true,
+        )  # fmt: skip
+        return
     u_true[0], u_true[1], u_true[2] = decompose_wheels(
         trace[0, 0], trace[0, 1], trace[0, 2], trace[last, 0], trace[last, 1], trace[last, 2], wheel_base
     )
-    if params[4] != 0.0:
-        u[0] = u_true[0]
-        u[1] = u_true[1]
-        u[2] = u_true[2]
-    else:
-        x = trace[0, 0]
-        y = trace[0, 1]
-        for i in range(1, last + 1):
-            mid = 0.5 * (trace[i - 1, 2] + trace[i, 2])
-            c = math.cos(mid)
-            s = math.sin(mid)
-            forward = (trace[i, 0] - trace[i - 1, 0]) * c + (trace[i, 1] - trace[i - 1, 1]) * s
-            x += forward * c
-            y += forward * s
-        u[0], u[1], u[2] = decompose_wheels(
-            trace[0, 0], trace[0, 1], trace[0, 2], x, y, trace[last, 2], wheel_base
-        )
+    x = trace[0, 0]
+    y = trace[0, 1]
+    for i in range(1, last + 1):
+        mid = 0.5 * (trace[i - 1, 2] + trace[i, 2])
+        c = math.cos(mid)
+        s = math.sin(mid)
+        forward = (trace[i, 0] - trace[i - 1, 0]) * c + (trace[i, 1] - trace[i - 1, 1]) * s
+        x += forward * c
+        y += forward * s
+    u[0], u[1], u[2] = decompose_wheels(
+        trace[0, 0], trace[0, 1], trace[0, 2], x, y, trace[last, 2], wheel_base
+    )
     _add_wheel_noise(contact_travel, params, normals, u, cov)
 
 
