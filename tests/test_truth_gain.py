@@ -177,3 +177,37 @@ def test_evaluation_reports_the_belief_truth_correlation_and_the_final_map_nees(
     error = np.asarray(u.filter.mean)[index] - u.true_landmarks[np.asarray(u.slot_truth)[slots]].ravel()
     nees = error @ np.linalg.inv(np.asarray(u.filter.cov)[np.ix_(index, index)]) @ error
     assert row["map_nees"] == pytest.approx(nees / index.size, rel=1e-9)
+
+
+@pytest.mark.parametrize("action", [{}, {"action": {"kind": "primitives", "hold": 10}}])
+def test_map_variance_reward_is_its_weight_times_the_belief_gain(action):
+    """The optional ``map_variance`` term pays weight x ``info["belief_gain"]`` (summed over a macro step's inner
+    steps), the rest of the reward is unchanged, and over an episode of control steps it sums to weight x
+    (each seen landmark's tr Sigma_jj at first sight - its final one): nothing for discoveries, the drop of the
+    mapped part's variance for everything after."""
+    weight = 40.0
+    plain = EKFSLAMEnv(max_episode_steps=30, **action)
+    shaped = EKFSLAMEnv(max_episode_steps=30, reward={"map_variance": weight}, **action)
+    plain.reset(seed=4)
+    _, info = shaped.reset(seed=4)
+    assert "map_variance" not in info["reward_terms"]
+    first = _traces(shaped)  # NaN for the landmarks not yet seen
+    rng = np.random.default_rng(5)
+    total, nonzero = 0.0, 0
+    for _ in range(30):
+        a = int(rng.integers(9)) if action else rng.uniform(-1, 1, 2).astype(np.float32)
+        _, reward_plain, *_, info_plain = plain.step(a)
+        _, reward, terminated, truncated, info = shaped.step(a)
+        term = info["reward_terms"]["map_variance"]
+        assert term == pytest.approx(weight * info["belief_gain"], rel=1e-12, abs=1e-15)  # sums of products
+        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
+        assert info["belief_gain"] == info_plain["belief_gain"]  # the same drive and filter
+        now = _traces(shaped)
+        first = np.where(np.isnan(first), now, first)
+        total += term
+        nonzero += term != 0.0
+        if terminated or truncated:
+            break
+    assert nonzero > 0 and total > 0.0  # marginal variances of seen landmarks only fall in an EKF
+    if not action:  # with macro steps a landmark's first sight falls between the observed steps
+            assert total == pytest.approx(weight * np.nansum(first - _traces(shaped)), rel=1e-9, abs=1e-12)

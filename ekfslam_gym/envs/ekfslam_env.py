@@ -77,7 +77,10 @@ class EKFSLAMEnv(gym.Env):
     ``filter.pose_prior``.
     ``collision`` = -1 per step in contact with a wall (weight 1 by default). Optional: ``a_opt``, ``e_opt``
     (drops of ln trace and ln lambda_max of Sigma), ``control_effort`` (-w |a|^2), ``step_cost`` (-w per step),
-    ``coverage`` (w per m^2 the sensor looks at for the first time: an exploration shaping for training).
+    ``coverage`` (w per m^2 the sensor looks at for the first time: an exploration shaping for training),
+    ``map_variance`` (w times ``info["belief_gain"]``, the drop of the seen landmarks' summed position
+    variances in m^2: it pays for revisits and loop closures that make the mapped part more accurate, never
+    for a discovery, since a landmark enters the sum only from the step after its first reading).
 
     Standing still earns little: every prediction adds odometry noise (the noise floor), a negative term, and
     re-observing the same landmarks pays ever less (the information about them grows like ln t). Because the
@@ -85,7 +88,8 @@ class EKFSLAMEnv(gym.Env):
     what remains unknown, and a landmark seen once already has paid most of what it ever will. Exploring pays
     the discovery terms; closing a loop pays the pose and map correlations it removes.
 
-    Belief beside truth (info only, never part of the reward): the gain the filter believes in, in nats and
+    Belief beside truth (info; the truth gain is never part of the reward, the belief gain only as the
+    optional ``map_variance`` term): the gain the filter believes in, in nats and
     unweighted, is the drop of ``info["log_det"]`` from one env step to the next (``reward_terms["info_gain"]``
     is it times its weight, and absent at weight 0). ``info["truth_gain"]`` (m^2) is the drop, over the step,
     of the summed squared position errors |estimate - true|^2 of the landmarks seen both before and after it
@@ -270,6 +274,7 @@ class EKFSLAMEnv(gym.Env):
         self._path_length = 0.0
         self._filter_failed = False
         self._collided = False
+        self._belief_gain = 0.0
         self._action = (0.0, 0.0)
         self._trail_true: list[tuple[float, float]] = []
         self._trail_est: list[tuple[float, float]] = []
@@ -392,10 +397,11 @@ class EKFSLAMEnv(gym.Env):
         self._newly_covered = self._mark_and_trail()
         if self._belief_image:
             self._mark_walls()
-        terms = self._rewards()
-        reward = sum(terms.values(), 0.0)
         nees, rmse, closures, self._worst_variance, seen, truth_gain, belief_gain = self._step_metrics(read)
         self._loop_closures += closures
+        self._belief_gain = belief_gain
+        terms = self._rewards()
+        reward = sum(terms.values(), 0.0)
         return terms, reward, self._is_terminated(), nees, rmse, seen, truth_gain, belief_gain, False
 
     def _correct_unknown(self, readings: Readings) -> np.ndarray:
@@ -482,6 +488,9 @@ class EKFSLAMEnv(gym.Env):
 
     def _reward_step_cost(self, weight: float) -> float:
         return -weight
+
+    def _reward_map_variance(self, weight: float) -> float:
+        return weight * self._belief_gain
 
     def _reward_coverage(self, weight: float) -> float:
         return weight * self._newly_covered * self.config.observation.memory_resolution**2

@@ -36,6 +36,13 @@ REWARD_TERMS: tuple[RewardTerm, ...] = (
         "step_cost", 0.0, "a constant cost per step (discourages idling once nothing is left to learn)"
     ),
     RewardTerm(
+        "map_variance",
+        0.0,
+        "weight per m^2 drop of the summed position variances tr Sigma_jj of the landmarks already seen "
+        "(info['belief_gain']): pays for making the mapped part more accurate (revisits, loop closures), which "
+        "a consistent filter's landmark RMSE follows, and nothing for a discovery; 0 by default",
+    ),
+    RewardTerm(
         "coverage",
         0.0,
         "bonus per m^2 of the world the sensor looks at for the first time (the coverage memory), an "
