@@ -210,4 +210,4 @@ def test_map_variance_reward_is_its_weight_times_the_belief_gain(action):
             break
     assert nonzero > 0 and total > 0.0  # marginal variances of seen landmarks only fall in an EKF
     if not action:  # with macro steps a landmark's first sight falls between the observed steps
-            assert total == pytest.approx(weight * np.nansum(first - _traces(shaped)), rel=1e-9, abs=1e-12)
+        assert total == pytest.approx(weight * np.nansum(first - _traces(shaped)), rel=1e-9, abs=1e-12)
