@@ -226,3 +226,28 @@ def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
     mismatch = [*reuse[:-1], "env_kwargs={action: {kind: primitives, hold: 5}, max_episode_steps: 8}"]
     with pytest.raises(ValueError, match="env_kwargs"):
         train.main(mismatch)
+
+
+def test_the_shipped_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
+    """configs/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe): demonstrations of Dict observations with
+    the belief image are cloned into the MultiInputPolicy's BeliefCNN, then PPO starts from the clone."""
+    import train
+    from agents import PPOAgent
+    from agents.extractors import BeliefCNN
+
+    entry = train.load_entry(train.Path("configs/ppo_belief_cnn_bc.yaml"), "EKFSLAM-v0")
+    assert (
+        entry["pretrain"]["episodes"] == 1000 and entry["env_kwargs"]["observation"]["belief_image"] is True
+    )
+    out = tmp_path / "run"
+    train.main(["--config", "configs/ppo_belief_cnn_bc.yaml", "--timesteps", "64", "--out", str(out), "--seed",
+                "0", "--no-progress", "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1",
+                "eval_freq=0", "checkpoint_freq=0", "pretrain={episodes: 2, epochs: 2}",
+                "env_kwargs={action: {kind: primitives, hold: 10}, max_episode_steps: 8, observation: {kind: dict, "
+                "belief_image: true}}"])  # fmt: skip
+    demos = demo_mod.load(out / "demonstrations.npz")
+    assert demos.meta["env_kwargs"]["observation"]["belief_image"] is True
+    assert json.loads((out / "pretrain.json").read_text())["pairs"] == 16
+    for name in ("bc_model.zip", "model.zip"):
+        agent = PPOAgent(out / name)
+        assert isinstance(agent.model.policy.features_extractor, BeliefCNN)
