@@ -49,3 +49,16 @@ def test_each_shipped_policy_runs_through_evaluate(env_id, capsys):
     result = json.loads(captured.out)
     assert result["agent"] == "ppo" and result["episodes"] == 1
     assert "trained with env_kwargs" not in captured.err  # it ran on its own recorded settings
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_each_shipped_policy_runs_through_the_consistency_report(env_id, capsys):
+    """The report builds the policy's env from its record (the v0 policy reads the belief image), not only the
+    recorded action interface."""
+    from ekfslam_gym.cli.consistency import main
+
+    model = MODELS / f"ppo_{env_id}.zip"
+    argv = ["--env-id", env_id, "--agents", "ppo", "--model", str(model), "--filters", "ekf", "--seeds", "0"]
+    assert main([*argv, "--steps", "12", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert [r["label"] for r in result["runs"]] == ["ppo / ekf"]

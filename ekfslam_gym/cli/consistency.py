@@ -20,7 +20,7 @@ import sys
 from collections.abc import Sequence
 
 from ..evaluation.consistency import QUANTITIES, ConsistencyRun, run_consistency
-from .common import parse_seeds
+from .common import merge_env_kwargs, parse_seeds
 
 VARIANTS = ("ekf", "fej", "iekf")
 
@@ -89,15 +89,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     runs = []
     for name in agents:
         agent = make_agent(name, model_path=args.model) if name == "ppo" else make_agent(name)
-        trained_action = dict((getattr(agent, "trained_env_kwargs", None) or {}).get("action") or {})
+        # A policy runs on its recorded env settings (its observation above all), as evaluate runs it; the
+        # step limit is --steps and a macro action is sampled per control step.
+        trained = dict(getattr(agent, "trained_env_kwargs", None) or {})
+        trained.pop("max_episode_steps", None)
+        trained_action = dict(trained.get("action") or {})
         decide_every = int(trained_action.get("hold", 1))
         if trained_action.get("kind", "velocity") == "waypoint":
             parser.error("a waypoint policy's macro steps cannot be sampled per control step")
         for variant in filters:
-            overrides = dict(args.env_kwargs or {})
+            overrides = merge_env_kwargs(trained, args.env_kwargs)
             overrides["filter"] = {**overrides.get("filter", {}), "variant": variant}
             if trained_action:
-                overrides["action"] = {**trained_action, "hold": 1}
+                overrides["action"] = {**overrides.get("action", {}), "hold": 1}
 
             def factory(overrides=overrides):
                 return gym.make(args.env_id, max_episode_steps=args.steps, **overrides)
