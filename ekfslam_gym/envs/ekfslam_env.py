@@ -89,9 +89,9 @@ class EKFSLAMEnv(gym.Env):
     the discovery terms; closing a loop pays the pose and map correlations it removes.
 
     Belief beside truth (info; the truth gain is never part of the reward, the belief gain only as the
-    optional ``map_variance`` term): the gain the filter believes in, in nats and
-    unweighted, is the drop of ``info["log_det"]`` from one env step to the next (``reward_terms["info_gain"]``
-    is it times its weight, and absent at weight 0). ``info["truth_gain"]`` (m^2) is the drop, over the step,
+    optional ``map_variance`` term): the gain the filter believes in, in nats and unweighted, is the drop of
+    ``info["log_det"]`` from one env step to the next (``reward_terms["info_gain"]`` is it times its weight,
+    and absent at weight 0). ``info["truth_gain"]`` (m^2) is the drop, over the step,
     of the summed squared position errors |estimate - true|^2 of the landmarks seen both before and after it
     (with unknown association: the slots holding a true landmark, each against the landmark it holds). A
     landmark first seen in a step enters the sum from the next step on, so its initial error counts as no
