@@ -52,10 +52,6 @@ def algo_class(algo: str = "ppo") -> Any:
     return getattr(imported, name)
 
 
-def _import_ppo() -> Any:
-    return algo_class("ppo")
-
-
 def saved_algo(zip_path: str | Path, record: dict[str, Any] | None = None) -> str:
     """The ``algo`` a saved model was trained with: the trainer's record (``entry.algo``, absent = ``ppo``), or
     without one the saved policy class (sb3-contrib's recurrent policies are ``ppo_lstm``)."""

@@ -151,7 +151,8 @@ class EKFSLAMEnv(gym.Env):
 
     After ``reset``, agents and evaluation read the belief through public, read-only views: ``filter``
     (``mean``, ``cov``, ``observed``, ...), ``observation_layout``, ``bounds``, ``coverage_memory``,
-    ``wall_memory`` (with the belief image), ``elapsed_steps``; ``world`` and ``true_landmarks`` are privileged (baselines and evaluation only).
+    ``wall_memory`` (with the belief image), ``elapsed_steps``; ``world`` and ``true_landmarks`` are privileged
+    (baselines and evaluation only).
 
     ## Registered Configurations
     - ``EKFSLAM-v0``: 20 x 20 m arena, 30 landmarks, 500 steps of 0.1 s.
@@ -200,8 +201,7 @@ class EKFSLAMEnv(gym.Env):
         # runs when off.
         self._belief_image = config.observation.belief_image
         if self._belief_image:
-            size = config.observation.belief_size
-            self._image = np.zeros((3, size, size), dtype=np.float32)
+            self._image = np.zeros(self.observation_space["belief_image"].shape, dtype=np.float32)
         self._constants = observation_constants(config.observation, config.sensor)
         # The reward hooks of the terms with a non-zero weight, in REWARD_TERMS order: (name, weight, hook).
         self._reward_hooks = tuple(

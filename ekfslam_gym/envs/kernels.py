@@ -1,6 +1,7 @@
 """The env's compiled kernels: the observation (one call writes the whole flat vector), the coverage memory, the
-belief image and its wall memory (``observation.belief_image``), and the per-step metrics. Compiled because the env is stepped millions of times and each numpy call costs
-microseconds; delivered through ``ekfslam_gym.compiled`` (ahead of time when installed, else numba's JIT).
+belief image and its wall memory (``observation.belief_image``), and the per-step metrics. Compiled because the
+env is stepped millions of times and each numpy call costs microseconds; delivered through
+``ekfslam_gym.compiled`` (ahead of time when installed, else numba's JIT).
 """
 
 from __future__ import annotations
