@@ -1,12 +1,16 @@
-"""Demonstrations of the greedy planner in the primitives action interface, for behaviour cloning.
+"""Demonstrations of a planner in a macro action interface, for behaviour cloning.
 
 A policy learns faster when a planner teaches it first (imitation, then RL; issue 8's planner-guided training).
-For the demonstrations to be imitable they must be in the policy's own interface: ``GreedyPrimitivesPlanner``
-is the greedy information-gain planner (``agents.greedy``) choosing, once per env step of a primitives env
-(``action.kind: primitives``), the index of the primitive to hold for ``action.hold`` control steps, planned from
-the env's belief exactly as the velocity agent plans. ``collect`` drives a primitives env with it and keeps
-the env's raw observations (before any VecNormalize), the chosen indices and the rewards; ``save``/``load``
-keep them as ``.npz``.
+For the demonstrations to be imitable they must be in the policy's own interface. Two planners act in one:
+
+- ``greedy``: ``GreedyPrimitivesPlanner``, the greedy information-gain planner (``agents.greedy``) choosing, once
+  per env step of a primitives env (``action.kind: primitives``), the index of the primitive to hold for
+  ``action.hold`` control steps, planned from the env's belief exactly as the velocity agent plans;
+- ``frontier``: ``agents.frontier.FrontierWaypointPlanner``, nearest-frontier exploration giving, once per env
+  step of a waypoint env (``action.kind: waypoint``), the goal on its path for the env's waypoint controller.
+
+``collect`` drives the env with one and keeps the env's raw observations (before any VecNormalize), the chosen
+actions and the rewards; ``save``/``load`` keep them as ``.npz``.
 
 Seeds: demonstrations are training data, so their seeds must avoid the held-out suite (10000-10049) and the
 evaluation seeds that select models (20000 onwards by default); ``check_seeds`` says so with a clear error.
@@ -28,11 +32,12 @@ from ekfslam_gym.envs.actions import PRIMITIVES
 from ekfslam_gym.evaluation.episodes import HELD_OUT_SEEDS
 
 from .base import wall_scan
+from .frontier import FrontierWaypointPlanner
 from .greedy import GreedyInfoGainAgent, primitive_controls
 from .greedy.grid import mark_seen, update_walls
 from .greedy.veto import WALL_JOIN, scan_geometry, to_world
 
-PLANNERS = ("greedy",)
+PLANNERS = {"greedy": "primitives", "frontier": "waypoint"}  # each planner's action interface
 
 
 class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
@@ -109,10 +114,11 @@ class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
         return f"GreedyPrimitivesPlanner(horizon={self.horizon})"
 
 
-def make_planner(name: str, **kwargs: Any) -> GreedyPrimitivesPlanner:
+def make_planner(name: str, **kwargs: Any) -> GreedyPrimitivesPlanner | FrontierWaypointPlanner:
+    """The demonstration planner ``name`` (a key of ``PLANNERS``) built with ``kwargs``."""
     if name not in PLANNERS:
         raise ValueError(f"unknown demonstration planner {name!r}; choose one of {list(PLANNERS)}")
-    return GreedyPrimitivesPlanner(**kwargs)
+    return GreedyPrimitivesPlanner(**kwargs) if name == "greedy" else FrontierWaypointPlanner(**kwargs)
 
 
 def check_seeds(seeds: Iterable[int], eval_seeds: Iterable[int] = range(20000, 20010)) -> list[int]:
@@ -133,7 +139,7 @@ class Demonstrations:
     """(observation, action) pairs of a planner, with the episode each pair came from and its reward.
 
     ``observations`` is an array (N, ...) for a Box observation, a dict of them for a Dict observation (raw,
-    as the env returns them); ``actions`` (N,) int64 primitive indices; ``rewards`` (N,) float64, the env's
+    as the env returns them); ``actions`` (N,) int64 primitive indices, or (N, 2) float32 waypoint goals; ``rewards`` (N,) float64, the env's
     reward for the step; ``episodes`` (N,) int64, the index into ``seeds`` of the pair's episode.
     """
 
@@ -165,8 +171,8 @@ def collect(
     driver: Any = None,
 ) -> Demonstrations:
     """One episode of the planner per seed in ``env_id`` built as the trainer builds its envs
-    (``gym.make(id, **env_kwargs)``, so ``max_episode_steps`` is gym.make's limit); the env must use
-    ``action.kind: primitives``. Seeds are checked with ``check_seeds``.
+    (``gym.make(id, **env_kwargs)``, so ``max_episode_steps`` is gym.make's limit); the env must use the
+    planner's action interface (``PLANNERS``). Seeds are checked with ``check_seeds``.
 
     With ``driver`` (an ``Agent``, e.g. the policy being cloned), the driver's actions are executed and the
     planner only labels each visited observation with its own choice: the states the learner reaches, labelled
@@ -189,10 +195,12 @@ def collect(
                 driver.reset(env, seed=seed)
             while True:
                 label = agent.act(observation)
-                action = label if driver is None else np.int64(driver.act(observation))
-                agent.executed(int(action))
+                action = label if driver is None else driver.act(observation)
+                if np.ndim(action) == 0:  # a primitive's index
+                    action = np.int64(action)
+                    agent.executed(int(action))
                 observations.append(observation)
-                actions.append(int(label))
+                actions.append(label)
                 episodes.append(k)
                 observation, reward, terminated, truncated, _ = env.step(action)
                 rewards.append(float(reward))
@@ -206,7 +214,9 @@ def collect(
         stacked = np.stack(observations)
     meta = {"env_id": env_id, "env_kwargs": dict(env_kwargs or {}), "planner": planner,
             "driver": None if driver is None else getattr(driver, "name", type(driver).__name__)}  # fmt: skip
-    return Demonstrations(stacked, np.array(actions, dtype=np.int64), np.array(rewards, dtype=np.float64),
+    labels = np.asarray(actions)
+    labels = labels.astype(np.int64 if labels.dtype.kind in "iu" else np.float32)
+    return Demonstrations(stacked, labels, np.array(rewards, dtype=np.float64),
                           np.array(episodes, dtype=np.int64), np.array(seeds, dtype=np.int64), meta)  # fmt: skip
 
 

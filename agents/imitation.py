@@ -1,8 +1,9 @@
 """Behaviour cloning of planner demonstrations into an SB3 PPO policy: the warm start of planner-guided training.
 
-Imitation first, then RL (issue 8): the policy is trained to choose the planner's primitive (cross-entropy on
-the Discrete action under the policy's own distribution, i.e. the negative log-likelihood ``evaluate_actions``
-gives, in shuffled minibatches over a few epochs), and optionally its value head to predict the discounted
+Imitation first, then RL (issue 8): the policy is trained to choose the planner's action (the negative
+log-likelihood ``evaluate_actions`` gives under the policy's own distribution: cross-entropy on a primitives
+env's Discrete action, the diagonal Gaussian's on a waypoint env's Box goal; in shuffled minibatches over a few
+epochs), and optionally its value head to predict the discounted
 return the demonstrations earned, so that PPO's first advantages are not those of an untrained critic. Before
 that, the VecNormalize statistics are fitted to the demonstrations (observations, and the discounted returns
 the reward normaliser divides by), so the policy is cloned on the inputs PPO fine-tuning will feed it.
@@ -38,6 +39,7 @@ PRETRAIN_DEFAULTS: dict[str, Any] = {
     "dagger_rounds": 0,  # DAgger rounds after cloning: the clone drives, the planner labels, clone again
     "dagger_episodes": 50,  # episodes per DAgger round, on the seeds after seed + episodes (path: those too)
 }
+BOX_MATCH = 0.1  # a cloned Box action within this distance of the planner's counts as a match (accuracy)
 DEMONSTRATIONS_FILE = "demonstrations.npz"
 BC_MODEL = "bc_model"  # the cloned policy, before any PPO update, saved with its statistics in the run folder
 
@@ -82,6 +84,14 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
         check_seeds(demonstration_seeds(settings, -1), eval_seeds)
     except ValueError as error:
         raise ValueError(f"pretrain.seed/episodes: {error}") from None
+    if entry is not None and "env_kwargs" in entry:
+        action = (entry.get("env_kwargs") or {}).get("action") or {}
+        kind = action.get("kind", "velocity") if isinstance(action, Mapping) else None
+        if kind != PLANNERS[settings["planner"]]:
+            raise ValueError(
+                f"pretrain.planner {settings['planner']!r} demonstrates in action.kind "
+                f"{PLANNERS[settings['planner']]!r}, but env_kwargs' action.kind is {kind!r}"
+            )
     return settings
 
 
@@ -146,8 +156,9 @@ def returns_to_go(rewards: np.ndarray, episodes: np.ndarray, gamma: float) -> np
 # ---------------------------------------------------------------------------------------------- cloning
 @dataclass
 class CloneReport:
-    """What cloning achieved: accuracy (the policy's most likely action is the planner's) on the pairs it was
-    trained on and on the held-back episodes (NaN when none), and the last epoch's mean losses."""
+    """What cloning achieved: accuracy on the pairs it was trained on and on the held-back episodes (NaN when
+    none), and the last epoch's mean losses. Accuracy: the fraction of pairs whose most likely action is the
+    planner's (Discrete), or lies within ``BOX_MATCH`` of it (Box, Euclidean, in the action's units)."""
 
     train_pairs: int
     holdout_pairs: int
@@ -186,7 +197,7 @@ def behaviour_clone(
     seed: int = 0,
     held: np.ndarray | None = None,
 ) -> CloneReport:
-    """Train ``model.policy`` (an SB3 actor-critic on a Discrete action space) to choose the demonstrated
+    """Train ``model.policy`` (an SB3 actor-critic on a Discrete or Box action space) to choose the demonstrated
     actions; the observations are normalised by the model's VecNormalize, if any (fit it first:
     ``fit_normalizer``). With ``value``, the value head also regresses the demonstrations' discounted returns
     (rewards normalised as the VecNormalize would, discounted with ``model.gamma``). ``held`` (bool per pair)
@@ -196,8 +207,11 @@ def behaviour_clone(
     from gymnasium import spaces
     from stable_baselines3.common.utils import obs_as_tensor
 
-    if not isinstance(model.action_space, spaces.Discrete):
-        raise ValueError(f"behaviour cloning needs a Discrete action space (action.kind primitives), got "
+    discrete = isinstance(model.action_space, spaces.Discrete)
+    if not discrete and not isinstance(model.action_space, spaces.Box):
+        raise ValueError(f"behaviour cloning needs a Discrete or Box action space, got {model.action_space}")
+    if demos.actions.shape[1:] != model.action_space.shape:
+        raise ValueError(f"demonstrated actions of shape {demos.actions.shape[1:]} do not fit the policy's "
                          f"{model.action_space}")  # fmt: skip
     if len(demos) == 0:
         raise ValueError("no demonstrations to clone")
@@ -211,7 +225,7 @@ def behaviour_clone(
         observations = normalizer.normalize_obs(observations)
         rewards = normalizer.normalize_reward(rewards)
     targets = returns_to_go(rewards, demos.episodes, float(model.gamma))
-    actions = demos.actions.astype(np.int64)
+    actions = demos.actions.astype(np.int64 if discrete else np.float32)
     if held is None:
         train_idx, hold_idx = split_episodes(demos.episodes, holdout, rng)
     else:
@@ -226,8 +240,13 @@ def behaviour_clone(
         if len(index) == 0:
             return float("nan")
         with torch.no_grad():
-            chosen = policy.get_distribution(take(index)).get_actions(deterministic=True)
-        return float(np.mean(chosen.cpu().numpy().reshape(-1) == actions[index]))
+            chosen = policy.get_distribution(take(index)).get_actions(deterministic=True).cpu().numpy()
+        if discrete:
+            return float(np.mean(chosen.reshape(-1) == actions[index]))
+        low, high = model.action_space.low, model.action_space.high
+        return float(
+            np.mean(np.linalg.norm(np.clip(chosen, low, high) - actions[index], axis=1) <= BOX_MATCH)
+        )
 
     optimizer = torch.optim.Adam(policy.parameters(), lr=float(learning_rate))
     policy.set_training_mode(True)

@@ -12,6 +12,7 @@ import pytest
 import ekfslam_gym  # noqa: F401  (registers the env ids)
 from agents import AGENTS, BASELINES, FrontierAgent, make_agent
 from agents.frontier import (
+    FrontierWaypointPlanner,
     coverage_and_bounds,
     frontier_cells,
     frontier_regions,
@@ -206,3 +207,53 @@ def test_goes_round_the_loop(monkeypatch):
     _, info, seen, modes = _episode(2, env_id="EKFSLAM-Loop-v0")
     assert seen >= 0.9 and info["collisions"] == 0
     assert modes == {"explore", "revisit"}  # it ran out of frontiers and went back to improve the map
+
+
+WAYPOINT_KWARGS = {"action": {"kind": "waypoint", "hold": 10}, "max_episode_steps": 50}
+
+
+def _waypoint_episode(seed, env_id="EKFSLAM-v0", **kwargs):
+    env = gym.make(env_id, **WAYPOINT_KWARGS)
+    observation, _ = env.reset(seed=seed)
+    planner = FrontierWaypointPlanner(**kwargs)
+    planner.reset(env, seed=seed)
+    goals, inner = [], []
+    while True:
+        pose = np.asarray(env.unwrapped.filter.pose, dtype=float)
+        goal = planner.act(observation)
+        if len(planner._path):  # the goal is the path's point goal_distance ahead, relative to the estimate
+            target = planner._path[planner._carrot_index(pose, planner._reach)]
+            c, s = math.cos(pose[2]), math.sin(pose[2])
+            d = target - pose[:2]
+            expected = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]]) / 3.0
+            assert np.allclose(goal, np.clip(expected, -1, 1), atol=1e-6)
+            assert np.hypot(*d) <= planner.goal_distance + 1e-9
+        goals.append(goal)
+        observation, _, terminated, truncated, info = env.step(goal)
+        inner.append(info["inner_steps"])
+        if terminated or truncated:
+            break
+    seen = float(np.mean(env.unwrapped.filter.observed))
+    env.close()
+    return np.array(goals), info, seen, inner
+
+
+def test_the_waypoint_planner_gives_goals_on_its_path_and_explores():
+    """The frontier planner in the waypoint interface (the teacher of configs/ppo_frontier_bc.yaml): valid,
+    deterministic goals on its path, macro steps mostly driven in full, most landmarks seen, no contact."""
+    goals, info, seen, inner = _waypoint_episode(0)
+    again, _, _, _ = _waypoint_episode(0)
+    assert np.array_equal(goals, again)
+    assert goals.dtype == np.float32 and goals.shape[1] == 2 and np.all(np.abs(goals) <= 1.0)
+    assert seen >= 0.9 and info["collisions"] == 0  # 1.0 and 0 when this was written
+    assert np.mean(np.array(inner) == 10) > 0.8  # goals beyond the controller's slowing distance
+
+
+def test_the_waypoint_planner_needs_a_waypoint_env():
+    with pytest.raises(ValueError, match="goal_distance"):
+        FrontierWaypointPlanner(goal_distance=0.0)
+    env = gym.make("EKFSLAM-v0")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="waypoint"):
+        FrontierWaypointPlanner().reset(env, seed=0)
+    env.close()

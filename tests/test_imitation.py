@@ -1,5 +1,5 @@
-"""Planner-guided training: the greedy planner's demonstrations in the primitives interface, behaviour cloning
-into an SB3 policy, and the ``pretrain`` switch of train.py's config. Never asserts learning quality on the env:
+"""Planner-guided training: the greedy planner's demonstrations in the primitives interface and the frontier
+planner's in the waypoint interface, behaviour cloning into an SB3 policy (Discrete and Box actions), and the ``pretrain`` switch of train.py's config. Never asserts learning quality on the env:
 cloning is checked on a synthetic task whose answer is known."""
 
 import json
@@ -13,6 +13,7 @@ pytest.importorskip("stable_baselines3")
 from agents import demonstrations as demo_mod  # noqa: E402
 from agents.demonstrations import Demonstrations, GreedyPrimitivesPlanner, check_seeds, collect  # noqa: E402
 from agents.imitation import (  # noqa: E402
+    BOX_MATCH,
     behaviour_clone,
     discounted_running_returns,
     fit_normalizer,
@@ -22,6 +23,7 @@ from agents.imitation import (  # noqa: E402
 from ekfslam_gym.envs.actions import PRIMITIVES  # noqa: E402
 
 PRIMITIVE_KWARGS = {"action": {"kind": "primitives", "hold": 10}, "max_episode_steps": 6}
+WAYPOINT_KWARGS = {"action": {"kind": "waypoint", "hold": 10}, "max_episode_steps": 6}
 
 
 def test_demonstrations_have_the_env_shapes_and_valid_planner_actions(tmp_path):
@@ -92,6 +94,23 @@ def test_dagger_collection_executes_the_driver_and_records_the_planners_labels()
     assert np.any(demos.actions != PRIMITIVES.index((0.0, 1.0)))  # labels are the planner's, not the driver's
 
 
+def test_frontier_demonstrations_are_waypoint_goals_and_a_driver_can_drive():
+    demos = collect("EKFSLAM-v0", [30000], WAYPOINT_KWARGS, planner="frontier")
+    assert demos.meta["planner"] == "frontier" and len(demos) == 6
+    assert demos.actions.dtype == np.float32 and demos.actions.shape == (6, 2)
+    assert np.all(np.abs(demos.actions) <= 1.0) and np.ptp(demos.actions, axis=0).max() > 0
+    # DAgger in the waypoint interface: the driver's goals (straight back here) are executed, the labels are the
+    # planner's (a goal ahead on its path, never straight back).
+    backwards = type("Back", (), {"name": "back", "reset": lambda self, env, seed=None: None,
+                                  "act": lambda self, obs: np.array([-1.0, 0.0], dtype=np.float32)})()  # fmt: skip
+    driven = collect("EKFSLAM-v0", [30000], WAYPOINT_KWARGS, planner="frontier", driver=backwards)
+    assert np.array_equal(driven.actions[0], demos.actions[0])  # the same first state, the same label
+    assert not np.array_equal(driven.observations[1:], demos.observations[1:])  # the driver drove
+    assert not np.any(np.all(np.isclose(driven.actions, [-1.0, 0.0]), axis=1))
+    with pytest.raises(ValueError, match="waypoint"):
+        collect("EKFSLAM-v0", [30000], PRIMITIVE_KWARGS, planner="frontier")
+
+
 def test_demonstration_seeds_avoid_the_held_out_and_evaluation_seeds():
     assert check_seeds(range(30000, 30003)) == [30000, 30001, 30002]
     for bad in ([10000], [10049], [20005], [-1]):
@@ -156,6 +175,36 @@ def test_behaviour_cloning_learns_a_deterministic_labelling():
     assert np.isfinite(report.value_loss) and report.action_loss < 0.3
 
 
+class GoalEnv(LabelEnv):
+    """LabelEnv with a waypoint-like Box(-1, 1, (2,)) action."""
+
+    action_space = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+
+def test_behaviour_cloning_learns_a_continuous_labelling():
+    """Box actions (the waypoint interface): the Gaussian policy's mean is cloned onto goals that are a smooth
+    function of the observation; its spread shrinks from the initial std of 1."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    torch.set_num_threads(1)
+    discrete = synthetic()
+    weights = np.array([[0.4, -0.3, 0.2, 0.0], [-0.2, 0.3, 0.3, -0.3]])
+    goals = np.tanh((discrete.observations - 3.0) @ weights.T).astype(np.float32)
+    demos = Demonstrations(discrete.observations, goals, discrete.rewards, discrete.episodes, discrete.seeds)
+    venv = VecNormalize(DummyVecEnv([GoalEnv]), gamma=0.9)
+    model = PPO("MlpPolicy", venv, seed=0, n_steps=64, batch_size=64, gamma=0.9)
+    fit_normalizer(venv, demos)
+    before = behaviour_clone(model, demos, epochs=0, seed=0)
+    report = behaviour_clone(model, demos, epochs=15, batch_size=128, learning_rate=3e-3, seed=0)
+    assert before.holdout_accuracy < 0.3  # an untrained mean near 0: few goals within BOX_MATCH of it
+    assert report.train_accuracy > 0.9 and report.holdout_accuracy > 0.9
+    assert float(model.policy.log_std.detach().exp().max()) < 0.5 and BOX_MATCH == 0.1
+    with pytest.raises(ValueError, match="do not fit"):
+        behaviour_clone(model, discrete, epochs=1)  # (N,) primitive indices for a Box(2) policy
+
+
 def test_pretrain_setting_validates():
     assert validate_pretrain(None) is None and validate_pretrain(False) is None
     settings = validate_pretrain({"episodes": 5})
@@ -170,6 +219,12 @@ def test_pretrain_setting_validates():
             validate_pretrain(bad)
     with pytest.raises(ValueError, match="evaluation"):
         validate_pretrain({"seed": 500, "episodes": 10}, {"eval_seed": 505, "eval_episodes": 10})
+    assert (
+        validate_pretrain({"planner": "frontier"}, {"env_kwargs": WAYPOINT_KWARGS})["planner"] == "frontier"
+    )
+    for planner, kwargs in (("frontier", PRIMITIVE_KWARGS), ("greedy", WAYPOINT_KWARGS), ("greedy", {})):
+        with pytest.raises(ValueError, match="demonstrates in action.kind"):
+            validate_pretrain({"planner": planner}, {"env_kwargs": kwargs})
 
 
 def test_train_settings_switch_is_checked_and_absent_means_none(tmp_path):
@@ -251,3 +306,25 @@ def test_the_shipped_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_pat
     for name in ("bc_model.zip", "model.zip"):
         agent = PPOAgent(out / name)
         assert isinstance(agent.model.policy.features_extractor, BeliefCNN)
+
+
+def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
+    """configs/ppo_frontier_bc.yaml: the frontier planner's waypoint goals, with Dict observations and the belief
+    image, cloned into the Gaussian MultiInputPolicy, then PPO starts from the clone."""
+    import train
+    from agents import PPOAgent
+
+    entry = train.load_entry(train.Path("configs/ppo_frontier_bc.yaml"), "EKFSLAM-v0")
+    assert entry["pretrain"]["planner"] == "frontier" and entry["env_kwargs"]["action"]["kind"] == "waypoint"
+    out = tmp_path / "run"
+    train.main(["--config", "configs/ppo_frontier_bc.yaml", "--timesteps", "64", "--out", str(out), "--seed",
+                "0", "--no-progress", "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1",
+                "eval_freq=0", "checkpoint_freq=0", "pretrain={planner: frontier, episodes: 2, epochs: 2}",
+                "env_kwargs={action: {kind: waypoint, hold: 10}, max_episode_steps: 8, observation: {kind: dict, "
+                "belief_image: true}}"])  # fmt: skip
+    demos = demo_mod.load(out / "demonstrations.npz")
+    assert demos.actions.dtype == np.float32 and demos.actions.shape == (16, 2)
+    record = json.loads((out / "pretrain.json").read_text())
+    assert record["pairs"] == 16 and 0 <= record["clone"]["holdout_accuracy"] <= 1
+    for name in ("bc_model.zip", "model.zip"):
+        assert PPOAgent(out / name).model.action_space == gym.spaces.Box(-1.0, 1.0, (2,), np.float32)

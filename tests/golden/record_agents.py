@@ -13,7 +13,7 @@ import numpy as np
 
 import ekfslam_gym  # noqa: F401  (registers the ids)
 
-AGENT_NAMES = ("circle", "lawnmower", "greedy")
+AGENT_NAMES = ("circle", "lawnmower", "greedy", "frontier")
 ENV_IDS = ("EKFSLAM-v0", "EKFSLAM-Loop-v0")
 STEPS = 120
 SEED = 7
