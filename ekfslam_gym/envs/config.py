@@ -180,6 +180,10 @@ class ObservationConfig:
     coverage memory, 1 the seen landmarks' estimates (each in its cell, weighted by its certainty
     1 / (1 + sqrt(tr Sigma_jj) / cell size)), 2 a memory of where the wall scan has hit a wall (placed at the
     pose estimate). For a CNN (``agents.extractors.BeliefCNN``); ``ekfslam_gym.envs.observation`` has details.
+    last_action (``dict`` only, off by default): the Dict observation gains ``last_action``, the action the
+    last env step executed (zeros after reset): a float32 one-hot of the primitive in a primitives env, the
+    clipped action (velocity or waypoint goal) otherwise. A policy's own commitment (a planner it imitates
+    keeps driving the primitive it chose) is otherwise invisible to a feed-forward policy.
     """
 
     kind: str = "box"
@@ -192,6 +196,7 @@ class ObservationConfig:
     belief_image: bool = False
     belief_size: int = 16
     belief_extent: float = 8.0
+    last_action: bool = False
 
     def __post_init__(self) -> None:
         _require(self.kind in ("box", "dict"), "observation.kind", "must be box|dict", self.kind)
@@ -211,6 +216,13 @@ class ObservationConfig:
         )
         _integer("observation.belief_size", self.belief_size, 2)
         _positive("observation.belief_extent", self.belief_extent)
+        _require(isinstance(self.last_action, bool), "observation.last_action", "must be a bool", self.last_action)  # fmt: skip
+        _require(
+            not self.last_action or self.kind == "dict",
+            "observation.last_action",
+            f"needs observation.kind dict, kind is {self.kind!r}: must be false",
+            self.last_action,
+        )
 
 
 ACTION_KINDS = ("velocity", "primitives", "waypoint")

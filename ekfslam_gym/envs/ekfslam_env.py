@@ -64,6 +64,10 @@ class EKFSLAMEnv(gym.Env):
     a wall memory (``wall_memory``, laid out like ``coverage_memory``) that every control step marks at the
     scan's endpoints placed from the pose estimate. All of it comes from the belief, never from the true pose,
     landmarks or walls; ``agents.extractors.BeliefCNN`` reads it (``configs/ppo_belief_cnn.yaml``).
+    With ``observation.last_action`` (Dict only, off by default) the Dict gains ``last_action``, the action the
+    last env step executed, zeros after reset: a float32 one-hot ``Box(0, 1, (K,))`` of the primitive in a
+    primitives env, else the clipped action as the action space's Box. It is the policy's own commitment,
+    which a planner it imitates keeps and a feed-forward policy otherwise cannot see.
 
     ## Rewards
     The sum of the terms in ``info["reward_terms"]``, those with a non-zero weight in ``reward`` (the names and
@@ -194,7 +198,7 @@ class EKFSLAMEnv(gym.Env):
         # One control step per env step (the default): step() takes its direct path, as fast as before.
         self._single = config.action.kind == "velocity" and config.action.steps == 1
         self._hold = config.action.steps
-        self.observation_space = observation_space(self._layout, config.observation)
+        self.observation_space = observation_space(self._layout, config.observation, self.action_space)
         self._obs = np.zeros(self._layout.size, dtype=np.float32)
         self._flat = config.observation.kind == "box"
         # The belief image (observation.belief_image): its buffer, filled with the observation; nothing of it
@@ -202,6 +206,12 @@ class EKFSLAMEnv(gym.Env):
         self._belief_image = config.observation.belief_image
         if self._belief_image:
             self._image = np.zeros(self.observation_space["belief_image"].shape, dtype=np.float32)
+        # The last executed action (observation.last_action), one-hot for primitives; None when off.
+        self._last_action = (
+            np.zeros(self.observation_space["last_action"].shape, dtype=np.float32)
+            if config.observation.last_action
+            else None
+        )
         self._constants = observation_constants(config.observation, config.sensor)
         # The reward hooks of the terms with a non-zero weight, in REWARD_TERMS order: (name, weight, hook).
         self._reward_hooks = tuple(
@@ -276,6 +286,8 @@ class EKFSLAMEnv(gym.Env):
         self._collided = False
         self._belief_gain = 0.0
         self._action = (0.0, 0.0)
+        if self._last_action is not None:
+            self._last_action[:] = 0.0
         self._trail_true: list[tuple[float, float]] = []
         self._trail_est: list[tuple[float, float]] = []
 
@@ -308,6 +320,8 @@ class EKFSLAMEnv(gym.Env):
             raise gym.error.ResetNeeded("call reset() before step()")
         if self._single:
             a0, a1 = clipped_velocity(action)
+            if self._last_action is not None:
+                self._last_action[:] = (a0, a1)
             terms, reward, terminated, nees, rmse, seen, truth_gain, belief_gain, failed = self._control_step(
                 a0, a1
             )
@@ -326,6 +340,8 @@ class EKFSLAMEnv(gym.Env):
         interface = self._interface
         mean = self._belief[0]
         interface.begin(action, mean[:3])
+        if self._last_action is not None:
+            self._remember(action)
         totals: dict[str, float] = {}
         reward, truth_gain, belief_gain, collided, terminated, inner = 0.0, 0.0, 0.0, False, False, []
         for _ in range(self._hold):
@@ -610,7 +626,17 @@ class EKFSLAMEnv(gym.Env):
         observation = self._layout.split(self._obs)
         if self._belief_image:
             observation["belief_image"] = self._image.copy()
+        if self._last_action is not None:
+            observation["last_action"] = self._last_action.copy()
         return observation
+
+    def _remember(self, action) -> None:
+        """Keep a macro action (checked by the interface's ``begin``) for ``observation.last_action``."""
+        if isinstance(self.action_space, gym.spaces.Discrete):
+            self._last_action[:] = 0.0
+            self._last_action[int(np.asarray(action).reshape(-1)[0])] = 1.0
+        else:
+            self._last_action[:] = clipped_velocity(action)
 
     # ------------------------------------------------------------------ access for agents and evaluation
     @property

@@ -27,6 +27,10 @@ coarse            fraction of it looked at, so that beyond the fine window the r
 Everything is computed by one compiled kernel writing into a preallocated vector: the env is stepped millions
 of times and each numpy call costs microseconds.
 
+``observation.last_action`` (Dict observations only, off by default) adds the key ``last_action``: the action
+the last env step executed (zeros after reset), a float32 one-hot of the primitive for a Discrete action, else
+the clipped action, in the action's Box (``last_action_space``).
+
 The belief image (``observation.belief_image``, Dict observations only, off by default) is a further key,
 ``belief_image``: float32 (3, S, S) in [0, 1], S = ``belief_size`` (16), a robot-centred window reaching
 ``belief_extent`` m (8) to each side, centred on the pose *estimate* and turned with its heading exactly like
@@ -162,11 +166,27 @@ def belief_image_space(observation: ObservationConfig) -> spaces.Box:
     return spaces.Box(0.0, 1.0, shape=(BELIEF_CHANNELS, size, size), dtype=np.float32)
 
 
-def observation_space(layout: ObservationLayout, observation: ObservationConfig) -> spaces.Space:
-    """The env's observation space: the layout's Box or Dict, plus ``belief_image`` when it is enabled."""
+def last_action_space(action_space: spaces.Space) -> spaces.Box:
+    """The ``last_action`` key's space: a float32 one-hot (n,) for a Discrete(n) action, else the action's Box."""
+    if isinstance(action_space, spaces.Discrete):
+        return spaces.Box(0.0, 1.0, shape=(int(action_space.n),), dtype=np.float32)
+    if isinstance(action_space, spaces.Box):
+        return spaces.Box(action_space.low, action_space.high, dtype=np.float32)
+    raise TypeError(f"observation.last_action supports Discrete and Box actions, got {action_space}")
+
+
+def observation_space(
+    layout: ObservationLayout, observation: ObservationConfig, action_space: spaces.Space | None = None
+) -> spaces.Space:
+    """The env's observation space: the layout's Box or Dict, plus ``belief_image`` and ``last_action`` (of
+    ``action_space``) when they are enabled."""
     space = layout.space(observation.kind)
     if observation.belief_image:
         space = spaces.Dict({**space.spaces, "belief_image": belief_image_space(observation)})
+    if observation.last_action:
+        if action_space is None:
+            raise ValueError("observation.last_action needs the action space")
+        space = spaces.Dict({**space.spaces, "last_action": last_action_space(action_space)})
     return space
 
 
