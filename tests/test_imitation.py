@@ -328,3 +328,18 @@ def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
     assert record["pairs"] == 16 and 0 <= record["clone"]["holdout_accuracy"] <= 1
     for name in ("bc_model.zip", "model.zip"):
         assert PPOAgent(out / name).model.action_space == gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+
+def test_the_shipped_coverage_recipe_is_the_cnn_recipe_with_the_coverage_bonus():
+    """configs/ppo_belief_cnn_bc_coverage.yaml (models/ppo_EKFSLAM-v0.zip's recipe) differs from
+    configs/ppo_belief_cnn_bc.yaml only in the reward, and the shipped model's record holds that same entry."""
+    import yaml
+
+    import train
+
+    base = train.load_entry(train.Path("configs/ppo_belief_cnn_bc.yaml"), "EKFSLAM-v0")
+    bonus = train.load_entry(train.Path("configs/ppo_belief_cnn_bc_coverage.yaml"), "EKFSLAM-v0")
+    assert bonus["env_kwargs"].pop("reward") == {"coverage": 1.0}
+    assert bonus == base
+    record = yaml.safe_load(open("models/ppo_EKFSLAM-v0_config.yaml"))["entry"]
+    assert record == train.load_entry(train.Path("configs/ppo_belief_cnn_bc_coverage.yaml"), "EKFSLAM-v0")
