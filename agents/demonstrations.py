@@ -139,8 +139,9 @@ class Demonstrations:
     """(observation, action) pairs of a planner, with the episode each pair came from and its reward.
 
     ``observations`` is an array (N, ...) for a Box observation, a dict of them for a Dict observation (raw,
-    as the env returns them); ``actions`` (N,) int64 primitive indices, or (N, 2) float32 waypoint goals; ``rewards`` (N,) float64, the env's
-    reward for the step; ``episodes`` (N,) int64, the index into ``seeds`` of the pair's episode.
+    as the env returns them); ``actions`` (N,) int64 primitive indices, or (N, 2) float32 waypoint goals;
+    ``rewards`` (N,) float64, the env's reward for the step; ``episodes`` (N,) int64, the index into ``seeds``
+    of the pair's episode.
     """
 
     observations: Any

@@ -3,10 +3,10 @@
 Imitation first, then RL (issue 8): the policy is trained to choose the planner's action (the negative
 log-likelihood ``evaluate_actions`` gives under the policy's own distribution: cross-entropy on a primitives
 env's Discrete action, the diagonal Gaussian's on a waypoint env's Box goal; in shuffled minibatches over a few
-epochs), and optionally its value head to predict the discounted
-return the demonstrations earned, so that PPO's first advantages are not those of an untrained critic. Before
-that, the VecNormalize statistics are fitted to the demonstrations (observations, and the discounted returns
-the reward normaliser divides by), so the policy is cloned on the inputs PPO fine-tuning will feed it.
+epochs), and optionally its value head to predict the discounted return the demonstrations earned, so that
+PPO's first advantages are not those of an untrained critic. Before that, the VecNormalize statistics are
+fitted to the demonstrations (observations, and the discounted returns the reward normaliser divides by), so
+the policy is cloned on the inputs PPO fine-tuning will feed it.
 
 ``pretrain(model, env_id, entry, out)`` is what ``agents.training`` runs before ``learn()`` when the config's
 ``train_settings`` hold a ``pretrain`` section (``PRETRAIN_DEFAULTS`` lists its keys); ``validate_pretrain``

@@ -14,8 +14,8 @@ its keyword arguments) and ``env_kwargs``. The settings only this script knows s
 ``checkpoint_freq`` (total env steps), ``torch_threads``, ``algo`` (rl-zoo3's name of the algorithm: ``ppo``, the
 default, or ``ppo_lstm``, sb3-contrib's RecurrentPPO with ``policy: MlpLstmPolicy`` or ``MultiInputLstmPolicy``;
 ``agents.ppo.ALGOS``; rl-zoo3 takes it as ``--algo``) and ``pretrain`` (planner-guided training: a planner's
-demonstrations, greedy's or frontier's, cloned into the policy before PPO, ``agents.imitation``; absent means none, and a
-resumed run never clones again; ``ppo`` only). ``--hyperparams`` overrides either kind. Class names in
+demonstrations, greedy's or frontier's, cloned into the policy before PPO, ``agents.imitation``; absent means
+none, and a resumed run never clones again; ``ppo`` only). ``--hyperparams`` overrides either kind. Class names in
 ``policy_kwargs`` (``features_extractor_class``, ``activation_fn``, ``optimizer_class``) may be given dotted,
 e.g. ``agents.extractors.BeliefCNN`` or ``torch.nn.ReLU`` (``nn.ReLU`` too): they are imported when the model
 is built, and the record keeps the names. The output folder receives:
