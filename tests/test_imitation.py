@@ -284,8 +284,20 @@ def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
         train.main(mismatch)
 
 
-def test_the_shipped_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
-    """configs/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe): demonstrations of Dict observations with
+def _smoke_train(config, out, pretrain, action_kind):
+    """``config``'s EKFSLAM-v0 entry through train.py at smoke size: two demonstration episodes of 8 decisions
+    (Dict observation with the belief image), cloned for two epochs, then 64 steps of PPO, into ``out``."""
+    import train
+
+    train.main(["--config", config, "--timesteps", "64", "--out", str(out), "--seed", "0", "--no-progress",
+                "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1", "eval_freq=0",
+                "checkpoint_freq=0", f"pretrain={pretrain}",
+                f"env_kwargs={{action: {{kind: {action_kind}, hold: 10}}, max_episode_steps: 8, "
+                "observation: {kind: dict, belief_image: true}}"])  # fmt: skip
+
+
+def test_the_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
+    """configs/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe, less its coverage bonus): demonstrations of Dict observations with
     the belief image are cloned into the MultiInputPolicy's BeliefCNN, then PPO starts from the clone."""
     import train
     from agents import PPOAgent
@@ -296,11 +308,7 @@ def test_the_shipped_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_pat
         entry["pretrain"]["episodes"] == 1000 and entry["env_kwargs"]["observation"]["belief_image"] is True
     )
     out = tmp_path / "run"
-    train.main(["--config", "configs/ppo_belief_cnn_bc.yaml", "--timesteps", "64", "--out", str(out), "--seed",
-                "0", "--no-progress", "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1",
-                "eval_freq=0", "checkpoint_freq=0", "pretrain={episodes: 2, epochs: 2}",
-                "env_kwargs={action: {kind: primitives, hold: 10}, max_episode_steps: 8, observation: {kind: dict, "
-                "belief_image: true}}"])  # fmt: skip
+    _smoke_train("configs/ppo_belief_cnn_bc.yaml", out, "{episodes: 2, epochs: 2}", "primitives")
     demos = demo_mod.load(out / "demonstrations.npz")
     assert demos.meta["env_kwargs"]["observation"]["belief_image"] is True
     assert json.loads((out / "pretrain.json").read_text())["pairs"] == 16
@@ -318,11 +326,9 @@ def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
     entry = train.load_entry(train.Path("configs/ppo_frontier_bc.yaml"), "EKFSLAM-v0")
     assert entry["pretrain"]["planner"] == "frontier" and entry["env_kwargs"]["action"]["kind"] == "waypoint"
     out = tmp_path / "run"
-    train.main(["--config", "configs/ppo_frontier_bc.yaml", "--timesteps", "64", "--out", str(out), "--seed",
-                "0", "--no-progress", "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1",
-                "eval_freq=0", "checkpoint_freq=0", "pretrain={planner: frontier, episodes: 2, epochs: 2}",
-                "env_kwargs={action: {kind: waypoint, hold: 10}, max_episode_steps: 8, observation: {kind: dict, "
-                "belief_image: true}}"])  # fmt: skip
+    _smoke_train(
+        "configs/ppo_frontier_bc.yaml", out, "{planner: frontier, episodes: 2, epochs: 2}", "waypoint"
+    )
     demos = demo_mod.load(out / "demonstrations.npz")
     assert demos.actions.dtype == np.float32 and demos.actions.shape == (16, 2)
     record = json.loads((out / "pretrain.json").read_text())

@@ -77,11 +77,15 @@ def clipped_velocity(action: Any) -> tuple[float, float]:
 class ActionInterface:
     """Turns one env action into control steps. ``begin`` checks the action (ValueError before anything
     changes) and fixes what the whole macro step needs; ``command`` gives the next control step's (forward,
-    turn), or None to end the macro step early."""
+    turn), or None to end the macro step early; ``encode`` writes the action ``begin`` took, as
+    ``observation.last_action`` holds it."""
 
     space: gym.Space
 
     def begin(self, action: Any, pose_estimate: np.ndarray) -> None:
+        raise NotImplementedError
+
+    def encode(self, out: np.ndarray) -> None:
         raise NotImplementedError
 
     def command(
@@ -100,6 +104,9 @@ class HeldVelocity(ActionInterface):
     def begin(self, action: Any, pose_estimate: np.ndarray) -> None:
         self._command = clipped_velocity(action)
 
+    def encode(self, out: np.ndarray) -> None:
+        out[:] = self._command
+
     def command(self, pose_estimate: np.ndarray, scan_of: Callable[[], np.ndarray]) -> tuple[float, float]:
         return self._command
 
@@ -109,6 +116,7 @@ class MotionPrimitives(ActionInterface):
 
     def __init__(self) -> None:
         self.space = gym.spaces.Discrete(len(PRIMITIVES))
+        self._index = 0
         self._command = PRIMITIVES[0]
 
     def begin(self, action: Any, pose_estimate: np.ndarray) -> None:
@@ -118,7 +126,13 @@ class MotionPrimitives(ActionInterface):
         index = int(index.reshape(()))
         if not 0 <= index < len(PRIMITIVES):
             raise ValueError(f"a primitives action is one integer in [0, {len(PRIMITIVES)}), got {index}")
+        self._index = index
         self._command = PRIMITIVES[index]
+
+    def encode(self, out: np.ndarray) -> None:
+        """A one-hot of the primitive."""
+        out[:] = 0.0
+        out[self._index] = 1.0
 
     def command(self, pose_estimate: np.ndarray, scan_of: Callable[[], np.ndarray]) -> tuple[float, float]:
         return self._command
@@ -132,10 +146,15 @@ class Waypoint(ActionInterface):
         self.controller = controller
         self.radius = radius
         self.goal = (0.0, 0.0)
+        self._action = (0.0, 0.0)
 
     def begin(self, action: Any, pose_estimate: np.ndarray) -> None:
-        forward, left = clipped_velocity(action)
+        self._action = forward, left = clipped_velocity(action)
         self.goal = goal_in_world(pose_estimate, forward * self.radius, left * self.radius)
+
+    def encode(self, out: np.ndarray) -> None:
+        """The clipped goal (forward, left), in units of the radius."""
+        out[:] = self._action
 
     def command(
         self, pose_estimate: np.ndarray, scan_of: Callable[[], np.ndarray]

@@ -341,7 +341,7 @@ class EKFSLAMEnv(gym.Env):
         mean = self._belief[0]
         interface.begin(action, mean[:3])
         if self._last_action is not None:
-            self._remember(action)
+            interface.encode(self._last_action)
         totals: dict[str, float] = {}
         reward, truth_gain, belief_gain, collided, terminated, inner = 0.0, 0.0, 0.0, False, False, []
         for _ in range(self._hold):
@@ -629,14 +629,6 @@ class EKFSLAMEnv(gym.Env):
         if self._last_action is not None:
             observation["last_action"] = self._last_action.copy()
         return observation
-
-    def _remember(self, action) -> None:
-        """Keep a macro action (checked by the interface's ``begin``) for ``observation.last_action``."""
-        if isinstance(self.action_space, gym.spaces.Discrete):
-            self._last_action[:] = 0.0
-            self._last_action[int(np.asarray(action).reshape(-1)[0])] = 1.0
-        else:
-            self._last_action[:] = clipped_velocity(action)
 
     # ------------------------------------------------------------------ access for agents and evaluation
     @property
