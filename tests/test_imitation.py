@@ -297,8 +297,9 @@ def _smoke_train(config, out, pretrain, action_kind):
 
 
 def test_the_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
-    """configs/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe, less its coverage bonus): demonstrations of Dict observations with
-    the belief image are cloned into the MultiInputPolicy's BeliefCNN, then PPO starts from the clone."""
+    """configs/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe, less its coverage bonus and wider image):
+    demonstrations of Dict observations with the belief image are cloned into the MultiInputPolicy's BeliefCNN,
+    then PPO starts from the clone."""
     import train
     from agents import PPOAgent
     from agents.extractors import BeliefCNN
