@@ -360,7 +360,7 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_and_a_wide
     assert wide == bonus
     assert bonus["env_kwargs"].pop("reward") == {"coverage": 1.0}
     assert bonus == base
-    record = yaml.safe_load(open("models/ppo_EKFSLAM-v0_config.yaml"))["entry"]
+    record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-v0_config.yaml").read_text())["entry"]
     assert record["pretrain"].pop("path").endswith("demonstrations.npz")
     expected = entry("ppo_belief_cnn_bc_coverage_wide")
     assert expected["pretrain"].pop("path") is None
