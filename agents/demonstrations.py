@@ -6,8 +6,10 @@ For the demonstrations to be imitable they must be in the policy's own interface
 - ``greedy``: ``GreedyPrimitivesPlanner``, the greedy information-gain planner (``agents.greedy``) choosing, once
   per env step of a primitives env (``action.kind: primitives``), the index of the primitive to hold for
   ``action.hold`` control steps, planned from the env's belief exactly as the velocity agent plans;
-- ``frontier``: ``agents.frontier.FrontierWaypointPlanner``, nearest-frontier exploration giving, once per env
-  step of a waypoint env (``action.kind: waypoint``), the goal on its path for the env's waypoint controller.
+- ``frontier``: nearest-frontier exploration in either interface: ``agents.frontier.FrontierWaypointPlanner``
+  giving, once per env step of a waypoint env (``action.kind: waypoint``), the goal on its path for the env's
+  waypoint controller; ``agents.frontier.FrontierPrimitivesPlanner`` choosing, in a primitives env, the
+  primitive whose arc ends nearest that goal.
 
 ``collect`` drives the env with one and keeps the env's raw observations (before any VecNormalize), the chosen
 actions and the rewards; ``save``/``load`` keep them as ``.npz``.
@@ -32,12 +34,12 @@ from ekfslam_gym.envs.actions import PRIMITIVES
 from ekfslam_gym.evaluation.episodes import HELD_OUT_SEEDS
 
 from .base import wall_scan
-from .frontier import FrontierWaypointPlanner
+from .frontier import FrontierPrimitivesPlanner, FrontierWaypointPlanner
 from .greedy import GreedyInfoGainAgent, primitive_controls
 from .greedy.grid import mark_seen, update_walls
 from .greedy.veto import WALL_JOIN, scan_geometry, to_world
 
-PLANNERS = {"greedy": "primitives", "frontier": "waypoint"}  # each planner's action interface
+PLANNERS = {"greedy": ("primitives",), "frontier": ("waypoint", "primitives")}  # the interfaces each acts in
 
 
 class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
@@ -114,11 +116,20 @@ class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
         return f"GreedyPrimitivesPlanner(horizon={self.horizon})"
 
 
-def make_planner(name: str, **kwargs: Any) -> GreedyPrimitivesPlanner | FrontierWaypointPlanner:
-    """The demonstration planner ``name`` (a key of ``PLANNERS``) built with ``kwargs``."""
+def make_planner(
+    name: str, kind: str, **kwargs: Any
+) -> GreedyPrimitivesPlanner | FrontierWaypointPlanner | FrontierPrimitivesPlanner:
+    """The demonstration planner ``name`` (a key of ``PLANNERS``) for action interface ``kind``, built with
+    ``kwargs``; ValueError when the planner does not act in that interface."""
     if name not in PLANNERS:
         raise ValueError(f"unknown demonstration planner {name!r}; choose one of {list(PLANNERS)}")
-    return GreedyPrimitivesPlanner(**kwargs) if name == "greedy" else FrontierWaypointPlanner(**kwargs)
+    if kind not in PLANNERS[name]:
+        raise ValueError(
+            f"the {name} planner demonstrates in action.kind {' or '.join(PLANNERS[name])}, not {kind!r}"
+        )
+    if name == "greedy":
+        return GreedyPrimitivesPlanner(**kwargs)
+    return FrontierWaypointPlanner(**kwargs) if kind == "waypoint" else FrontierPrimitivesPlanner(**kwargs)
 
 
 def check_seeds(seeds: Iterable[int], eval_seeds: Iterable[int] = range(20000, 20010)) -> list[int]:
@@ -173,7 +184,7 @@ def collect(
 ) -> Demonstrations:
     """One episode of the planner per seed in ``env_id`` built as the trainer builds its envs
     (``gym.make(id, **env_kwargs)``, so ``max_episode_steps`` is gym.make's limit); the env must use the
-    planner's action interface (``PLANNERS``). Seeds are checked with ``check_seeds``.
+    planner's action interfaces (``PLANNERS``). Seeds are checked with ``check_seeds``.
 
     With ``driver`` (an ``Agent``, e.g. the policy being cloned), the driver's actions are executed and the
     planner only labels each visited observation with its own choice: the states the learner reaches, labelled
@@ -185,7 +196,11 @@ def collect(
         raise ValueError("no demonstration seeds")
     qualified = env_id if ":" in env_id else f"ekfslam_gym:{env_id}"
     env = gym.make(qualified, **dict(env_kwargs or {}))
-    agent = make_planner(planner, **dict(planner_kwargs or {}))
+    try:
+        agent = make_planner(planner, env.unwrapped.config.action.kind, **dict(planner_kwargs or {}))
+    except ValueError:
+        env.close()
+        raise
     observations: list[Any] = []
     actions, rewards, episodes = [], [], []
     try:

@@ -87,10 +87,10 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
     if entry is not None and "env_kwargs" in entry:
         action = (entry.get("env_kwargs") or {}).get("action") or {}
         kind = action.get("kind", "velocity") if isinstance(action, Mapping) else None
-        if kind != PLANNERS[settings["planner"]]:
+        if kind not in PLANNERS[settings["planner"]]:
             raise ValueError(
                 f"pretrain.planner {settings['planner']!r} demonstrates in action.kind "
-                f"{PLANNERS[settings['planner']]!r}, but env_kwargs' action.kind is {kind!r}"
+                f"{' or '.join(map(repr, PLANNERS[settings['planner']]))}, but env_kwargs' action.kind is {kind!r}"
             )
     return settings
 

@@ -12,6 +12,7 @@ import pytest
 import ekfslam_gym  # noqa: F401  (registers the env ids)
 from agents import AGENTS, BASELINES, FrontierAgent, make_agent
 from agents.frontier import (
+    FrontierPrimitivesPlanner,
     FrontierWaypointPlanner,
     coverage_and_bounds,
     frontier_cells,
@@ -20,7 +21,10 @@ from agents.frontier import (
     path_sources,
 )
 from agents.greedy.grid import update_walls
+from agents.greedy.rollout import arc_poses
+from agents.greedy.veto import arc_vetoed, scan_geometry
 from ekfslam_gym.envs import EKFSLAMEnv
+from ekfslam_gym.envs.actions import PRIMITIVES
 
 
 def test_frontier_cells_of_a_hand_made_memory():
@@ -256,4 +260,62 @@ def test_the_waypoint_planner_needs_a_waypoint_env():
     env.reset(seed=0)
     with pytest.raises(ValueError, match="waypoint"):
         FrontierWaypointPlanner().reset(env, seed=0)
+    env.close()
+
+
+PRIMITIVE_KWARGS = {"action": {"kind": "primitives", "hold": 10}, "max_episode_steps": 50}
+
+
+def _primitives_episode(seed, env_id="EKFSLAM-v0"):
+    env = gym.make(env_id, **PRIMITIVE_KWARGS)
+    u = env.unwrapped
+    cfg = u.config
+    observation, _ = env.reset(seed=seed)
+    planner = FrontierPrimitivesPlanner()
+    planner.reset(env, seed=seed)
+    arcs = [arc_poses(v * cfg.robot.v_max, w * cfg.robot.omega_max, cfg.dt, 10) for v, w in PRIMITIVES]
+    chosen, checked = [], 0
+    while True:
+        pose = np.asarray(u.filter.pose, dtype=float)
+        index = planner.act(observation)
+        if len(planner._path):  # its arc ends nearest the path's point goal_distance ahead, among the allowed
+            target = planner._path[planner._carrot_index(pose, planner.goal_distance)]
+            c, s = math.cos(pose[2]), math.sin(pose[2])
+            ends = np.array([[pose[0] + c * a[-1, 0] - s * a[-1, 1], pose[1] + s * a[-1, 0] + c * a[-1, 1]]
+                             for a in arcs])  # fmt: skip
+            scan = np.asarray(u.observation_layout.part(observation, "scan")) * cfg.sensor.scan_max_range
+            points, segments = scan_geometry(scan, planner._angles, planner._scan_max)
+            allowed = [not arc_vetoed(a, pose, points, segments, planner._safe, planner._bounds, cfg.robot.radius)
+                       for a in arcs]  # fmt: skip
+            distance = np.where(allowed, np.hypot(*(ends - target).T), np.inf)
+            assert allowed[index] and distance[index] == distance.min()
+            checked += 1
+        chosen.append(index)
+        observation, _, terminated, truncated, info = env.step(index)
+        if terminated or truncated:
+            break
+    seen = float(np.mean(u.filter.observed))
+    env.close()
+    return np.array(chosen), info, seen, checked
+
+
+def test_the_primitives_planner_follows_its_path_with_the_nearest_allowed_arc_and_explores():
+    """The frontier planner in the primitives interface (the teacher of configs/ppo_frontier_primitives_bc.yaml):
+    each choice is the allowed primitive whose arc ends nearest its path's goal, deterministic, and the
+    episode sees most landmarks without touching a wall."""
+    chosen, info, seen, checked = _primitives_episode(0)
+    again, _, _, _ = _primitives_episode(0)
+    assert np.array_equal(chosen, again) and chosen.dtype == np.int64
+    assert np.all((chosen >= 0) & (chosen < len(PRIMITIVES))) and len(set(chosen.tolist())) > 2
+    assert checked > 0.8 * len(chosen)
+    assert seen >= 0.9 and info["collisions"] == 0  # 1.0 and 0 when this was written
+
+
+def test_the_primitives_planner_needs_a_primitives_env():
+    with pytest.raises(ValueError, match="goal_distance"):
+        FrontierPrimitivesPlanner(goal_distance=0.0)
+    env = gym.make("EKFSLAM-v0", **WAYPOINT_KWARGS)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="primitives"):
+        FrontierPrimitivesPlanner().reset(env, seed=0)
     env.close()

@@ -1,5 +1,5 @@
 """Planner-guided training: the greedy planner's demonstrations in the primitives interface and the frontier
-planner's in the waypoint interface, behaviour cloning into an SB3 policy (Discrete and Box actions), and the
+planner's in the waypoint and primitives interfaces, behaviour cloning into an SB3 policy (Discrete and Box actions), and the
 ``pretrain`` switch of train.py's config. Never asserts learning quality on the env: cloning is checked on
 synthetic tasks whose answers are known."""
 
@@ -108,8 +108,19 @@ def test_frontier_demonstrations_are_waypoint_goals_and_a_driver_can_drive():
     assert np.array_equal(driven.actions[0], demos.actions[0])  # the same first state, the same label
     assert not np.array_equal(driven.observations[1:], demos.observations[1:])  # the driver drove
     assert not np.any(np.all(np.isclose(driven.actions, [-1.0, 0.0]), axis=1))
-    with pytest.raises(ValueError, match="waypoint"):
-        collect("EKFSLAM-v0", [30000], PRIMITIVE_KWARGS, planner="frontier")
+    with pytest.raises(ValueError, match="waypoint or primitives, not 'velocity'"):
+        collect("EKFSLAM-v0", [30000], {"max_episode_steps": 6}, planner="frontier")
+    with pytest.raises(ValueError, match="primitives, not 'waypoint'"):
+        collect("EKFSLAM-v0", [30000], WAYPOINT_KWARGS, planner="greedy")
+
+
+def test_frontier_demonstrations_in_a_primitives_env_are_primitive_indices():
+    """The frontier planner in a primitives env (configs/ppo_frontier_primitives_bc.yaml's teacher) labels with
+    the index of a primitive, as the greedy one does, so the Discrete policy clones it the same way."""
+    demos = collect("EKFSLAM-v0", [30000], PRIMITIVE_KWARGS, planner="frontier")
+    assert demos.meta["planner"] == "frontier" and len(demos) == 6
+    assert demos.actions.dtype == np.int64 and demos.actions.shape == (6,)
+    assert np.all((demos.actions >= 0) & (demos.actions < len(PRIMITIVES)))
 
 
 def test_demonstration_seeds_avoid_the_held_out_and_evaluation_seeds():
@@ -223,7 +234,10 @@ def test_pretrain_setting_validates():
     assert (
         validate_pretrain({"planner": "frontier"}, {"env_kwargs": WAYPOINT_KWARGS})["planner"] == "frontier"
     )
-    for planner, kwargs in (("frontier", PRIMITIVE_KWARGS), ("greedy", WAYPOINT_KWARGS), ("greedy", {})):
+    assert (
+        validate_pretrain({"planner": "frontier"}, {"env_kwargs": PRIMITIVE_KWARGS})["planner"] == "frontier"
+    )
+    for planner, kwargs in (("frontier", {}), ("greedy", WAYPOINT_KWARGS), ("greedy", {})):
         with pytest.raises(ValueError, match="demonstrates in action.kind"):
             validate_pretrain({"planner": planner}, {"env_kwargs": kwargs})
 

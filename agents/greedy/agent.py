@@ -12,7 +12,7 @@ import numpy as np
 from ..base import Agent, beam_angles, clip_action, wall_scan
 from .grid import count_new, frontier_field, mark_seen, update_walls
 from .rollout import DEFAULT_PRIMITIVES, discovery_nats, primitive_controls, rollout, rollout_gain
-from .veto import WALL_JOIN, clearances, scan_geometry, to_world
+from .veto import WALL_JOIN, arc_vetoed, scan_geometry, to_world
 
 
 class GreedyInfoGainAgent(Agent):
@@ -118,22 +118,7 @@ class GreedyInfoGainAgent(Agent):
 
     # ------------------------------------------------------------------ pieces
     def _vetoed(self, rel: np.ndarray, pose: np.ndarray, points: np.ndarray, segments: np.ndarray) -> bool:
-        if np.allclose(rel[:, :2], rel[0, :2]):
-            return False  # turning in place never hits anything (from the origin, or from a first step's end)
-        d = clearances(rel, points, segments)
-        ahead = d[1:].min()
-        if ahead < self._safe and ahead < d[0]:
-            return True
-        # The world's bounds are walls too: veto leaving them, unless already outside and coming back.
-        world = to_world(rel, pose)
-        b, r = self._bounds, self.env.config.robot.radius
-        margin = (
-            np.minimum.reduce(
-                [world[:, 0] - b[0], b[2] - world[:, 0], world[:, 1] - b[1], b[3] - world[:, 1]]
-            )
-            - r
-        )
-        return bool(margin[1:].min() < 0.0 and margin[1:].min() < margin[0])
+        return arc_vetoed(rel, pose, points, segments, self._safe, self._bounds, self.env.config.robot.radius)
 
     def vetoed_primitives(self, scan: np.ndarray, pose: np.ndarray) -> np.ndarray:
         """Which primitives (bool per primitive) the wall scan (m, per beam) and the bounds rule out at ``pose``."""

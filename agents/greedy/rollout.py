@@ -43,15 +43,23 @@ def primitive_controls(
         control = np.array([v, omega])
     controls = np.tile(control, (horizon, 1))
     covs = np.tile(np.diag(std**2), (horizon, 1, 1))
-    poses = np.zeros((horizon + 1, 3))
-    for k in range(horizon):
+    return controls, covs, arc_poses(v, omega, dt, horizon)
+
+
+def arc_poses(v: float, omega: float, dt: float, steps: int) -> np.ndarray:
+    """The poses (steps + 1, 3) relative to the start that ``v`` (m/s) and ``omega`` (rad/s) held for ``steps``
+    steps of ``dt`` s reach in free space: each step a chord v dt sinc(omega dt / 2) at the mid-step heading."""
+    half = 0.5 * omega * dt
+    chord = v * dt * (math.sin(half) / half if abs(half) > 1e-9 else 1.0)
+    poses = np.zeros((steps + 1, 3))
+    for k in range(steps):
         x, y, theta = poses[k]
         poses[k + 1] = (
             x + chord * math.cos(theta + half),
             y + chord * math.sin(theta + half),
             theta + 2 * half,
         )
-    return controls, covs, poses
+    return poses
 
 
 def expected_readings(

@@ -38,6 +38,33 @@ def clearances(rel: np.ndarray, points: np.ndarray, segments: np.ndarray) -> np.
     return d
 
 
+def arc_vetoed(
+    rel: np.ndarray,
+    pose: np.ndarray,
+    points: np.ndarray,
+    segments: np.ndarray,
+    safe: float,
+    bounds: np.ndarray,
+    radius: float,
+) -> bool:
+    """Whether the path ``rel`` (K, 3; relative to ``pose``, from the origin) is ruled out: it comes within
+    ``safe`` m of a scanned wall and closer than where it starts, or leaves the world's ``bounds`` (xmin, ymin,
+    xmax, ymax; a robot of ``radius`` m) unless it starts outside and comes back. Turning in place never is."""
+    if np.allclose(rel[:, :2], rel[0, :2]):
+        return False  # turning in place never hits anything (from the origin, or from a first step's end)
+    d = clearances(rel, points, segments)
+    ahead = d[1:].min()
+    if ahead < safe and ahead < d[0]:
+        return True
+    world = to_world(rel, pose)
+    b = bounds
+    margin = (
+        np.minimum.reduce([world[:, 0] - b[0], b[2] - world[:, 0], world[:, 1] - b[1], b[3] - world[:, 1]])
+        - radius
+    )
+    return bool(margin[1:].min() < 0.0 and margin[1:].min() < margin[0])
+
+
 def to_world(rel: np.ndarray, pose: np.ndarray) -> np.ndarray:
     """Poses (K, 3) relative to ``pose`` in the world frame."""
     c, s = math.cos(pose[2]), math.sin(pose[2])
