@@ -311,7 +311,8 @@ def _smoke_train(config, out, pretrain, action_kind):
 
 
 def test_the_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
-    """configs/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe, less its coverage bonus and wider image):
+    """configs/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe, less its coverage bonus, wider image and
+    frontier teacher):
     demonstrations of Dict observations with the belief image are cloned into the MultiInputPolicy's BeliefCNN,
     then PPO starts from the clone."""
     import train
@@ -352,11 +353,11 @@ def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
         assert PPOAgent(out / name).model.action_space == gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
 
 
-def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_and_a_wider_image():
+def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_image_and_the_frontier_teacher():
     """configs/ppo_belief_cnn_bc_coverage.yaml differs from configs/ppo_belief_cnn_bc.yaml only in the reward,
-    configs/ppo_belief_cnn_bc_coverage_wide.yaml (models/ppo_EKFSLAM-v0.zip's recipe) from it only in the belief
-    image's reach, and the shipped model's record holds that same entry (less where its demonstrations were read:
-    seeds 1-4 reused seed 0's)."""
+    configs/ppo_belief_cnn_bc_coverage_wide.yaml from it only in the belief image's reach,
+    configs/ppo_frontier_primitives_bc.yaml (models/ppo_EKFSLAM-v0.zip's recipe) from that only in the teacher,
+    and the shipped model's record holds that same entry (seed 0's run, which collected its own demonstrations)."""
     import yaml
 
     import train
@@ -364,18 +365,19 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_and_a_wide
     def entry(name):
         return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-v0")
 
-    base, bonus, wide = (
+    base, bonus, wide, frontier = (
         entry("ppo_belief_cnn_bc"),
         entry("ppo_belief_cnn_bc_coverage"),
         entry("ppo_belief_cnn_bc_coverage_wide"),
+        entry("ppo_frontier_primitives_bc"),
     )
+    record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-v0_config.yaml").read_text())["entry"]
+    assert record == frontier
+    assert frontier["pretrain"]["planner"] == "frontier" and wide["pretrain"]["planner"] == "greedy"
+    frontier["pretrain"]["planner"] = "greedy"
+    assert frontier == wide
     assert wide["env_kwargs"]["observation"]["belief_extent"] == 16.0
     wide["env_kwargs"]["observation"]["belief_extent"] = 8.0
     assert wide == bonus
     assert bonus["env_kwargs"].pop("reward") == {"coverage": 1.0}
     assert bonus == base
-    record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-v0_config.yaml").read_text())["entry"]
-    assert record["pretrain"].pop("path").endswith("demonstrations.npz")
-    expected = entry("ppo_belief_cnn_bc_coverage_wide")
-    assert expected["pretrain"].pop("path") is None
-    assert record == expected
