@@ -312,9 +312,8 @@ def _smoke_train(config, out, pretrain, action_kind):
 
 def test_the_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
     """configs/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe, less its coverage bonus, wider image and
-    frontier teacher):
-    demonstrations of Dict observations with the belief image are cloned into the MultiInputPolicy's BeliefCNN,
-    then PPO starts from the clone."""
+    frontier teacher): demonstrations of Dict observations with the belief image are cloned into the
+    MultiInputPolicy's BeliefCNN, then PPO starts from the clone."""
     import train
     from agents import PPOAgent
     from agents.extractors import BeliefCNN
@@ -331,6 +330,32 @@ def test_the_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
     for name in ("bc_model.zip", "model.zip"):
         agent = PPOAgent(out / name)
         assert isinstance(agent.model.policy.features_extractor, BeliefCNN)
+
+
+def test_the_shipped_recipe_clones_the_frontier_planners_primitives_at_smoke_size(tmp_path):
+    """configs/ppo_frontier_primitives_bc.yaml (the shipped EKFSLAM-v0 recipe): the frontier planner's primitive
+    indices, with Dict observations and the belief image, cloned into the Discrete MultiInputPolicy, then PPO
+    starts from the clone."""
+    import train
+    from agents import PPOAgent
+
+    config = "configs/ppo_frontier_primitives_bc.yaml"
+    entry = train.load_entry(train.Path(config), "EKFSLAM-v0")
+    assert (
+        entry["pretrain"]["planner"] == "frontier" and entry["env_kwargs"]["action"]["kind"] == "primitives"
+    )
+    out = tmp_path / "run"
+    _smoke_train(config, out, "{planner: frontier, episodes: 2, epochs: 2}", "primitives")
+    demos = demo_mod.load(out / "demonstrations.npz")
+    assert (
+        demos.meta["planner"] == "frontier"
+        and demos.actions.dtype == np.int64
+        and demos.actions.shape == (16,)
+    )
+    record = json.loads((out / "pretrain.json").read_text())
+    assert record["pairs"] == 16 and 0 <= record["clone"]["holdout_accuracy"] <= 1
+    for name in ("bc_model.zip", "model.zip"):
+        assert PPOAgent(out / name).model.action_space == gym.spaces.Discrete(len(PRIMITIVES))
 
 
 def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
