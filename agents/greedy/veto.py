@@ -47,9 +47,10 @@ def arc_vetoed(
     bounds: np.ndarray,
     radius: float,
 ) -> bool:
-    """Whether the path ``rel`` (K, 3; relative to ``pose``, from the origin) is ruled out: it comes within
-    ``safe`` m of a scanned wall and closer than where it starts, or leaves the world's ``bounds`` (xmin, ymin,
-    xmax, ymax; a robot of ``radius`` m) unless it starts outside and comes back. Turning in place never is."""
+    """Whether the path ``rel`` (K, 3; relative to ``pose``, from the origin or, for a second primitive, from the
+    first's end) is ruled out: it comes within ``safe`` m of a scanned wall and closer than where it starts, or
+    leaves the world's ``bounds`` (xmin, ymin, xmax, ymax; a robot of ``radius`` m) unless it starts outside and
+    comes back. Turning in place never is."""
     if np.allclose(rel[:, :2], rel[0, :2]):
         return False  # turning in place never hits anything (from the origin, or from a first step's end)
     d = clearances(rel, points, segments)
