@@ -196,14 +196,10 @@ def collect(
         raise ValueError("no demonstration seeds")
     qualified = env_id if ":" in env_id else f"ekfslam_gym:{env_id}"
     env = gym.make(qualified, **dict(env_kwargs or {}))
-    try:
-        agent = make_planner(planner, env.unwrapped.config.action.kind, **dict(planner_kwargs or {}))
-    except ValueError:
-        env.close()
-        raise
     observations: list[Any] = []
     actions, rewards, episodes = [], [], []
     try:
+        agent = make_planner(planner, env.unwrapped.config.action.kind, **dict(planner_kwargs or {}))
         for k, seed in enumerate(seeds):
             observation, _ = env.reset(seed=seed)
             agent.reset(env, seed=seed)

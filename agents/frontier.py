@@ -479,6 +479,13 @@ class FrontierAgent(Agent):
         return f"FrontierAgent(min_region={self.min_region}, replan_every={self.replan_every})"
 
 
+def in_robot_frame(pose: np.ndarray, point: np.ndarray) -> tuple[float, float]:
+    """``point`` (world, m) as (forward, left) m relative to ``pose`` (x, y, heading)."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    dx, dy = point[0] - pose[0], point[1] - pose[1]
+    return c * dx + s * dy, -s * dx + c * dy
+
+
 class FrontierWaypointPlanner(FrontierAgent):
     """Nearest-frontier exploration acting in a ``waypoint`` env (``action.kind: waypoint``): once per env step
     it returns the goal the env's own waypoint controller drives to for up to ``action.hold`` control steps,
@@ -526,11 +533,8 @@ class FrontierWaypointPlanner(FrontierAgent):
         if self._advance(pose, scan, steps) is None:  # nothing reachable to do: turn left in place
             return np.array([0.0, 0.1], dtype=np.float32)
         target = self._carrot_index(pose, self._reach)
-        goal = self._path[target]
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        dx, dy = goal[0] - pose[0], goal[1] - pose[1]
-        forward, left = (c * dx + s * dy) / self._radius, (-s * dx + c * dy) / self._radius
-        return np.clip(np.array([forward, left], dtype=np.float32), -1.0, 1.0)
+        forward, left = in_robot_frame(pose, self._path[target])
+        return np.clip(np.array([forward / self._radius, left / self._radius], dtype=np.float32), -1.0, 1.0)
 
     def __repr__(self) -> str:
         return f"FrontierWaypointPlanner(goal_distance={self.goal_distance})"
@@ -575,30 +579,25 @@ class FrontierPrimitivesPlanner(FrontierAgent):
         ]
         self._safe = cfg.robot.radius + self.clearance
         self._radius = cfg.robot.radius
-        self._turn = {side: PRIMITIVES.index((0.0, side)) for side in (1.0, -1.0)}
+        self._look_around = np.int64(PRIMITIVES.index((0.0, 1.0)))  # turning left in place
         self._acted = False  # no macro step driven yet
 
     def act(self, observation: Any) -> np.int64:
         pose = np.asarray(self.env.filter.pose, dtype=float)
         scan = wall_scan(self.env, observation)
         steps, self._acted = (self._hold if self._acted else 0), True
-        if self._advance(pose, scan, steps) is None:  # nothing reachable to do: look around
-            return np.int64(self._turn[1.0])
-        goal = self._path[self._carrot_index(pose, self.goal_distance)]
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        dx, dy = goal[0] - pose[0], goal[1] - pose[1]
-        forward, left = c * dx + s * dy, -s * dx + c * dy  # the goal in the robot's frame
+        if self._advance(pose, scan, steps) is None:  # nothing reachable to do
+            return self._look_around
+        forward, left = in_robot_frame(pose, self._path[self._carrot_index(pose, self.goal_distance)])
         points, segments = scan_geometry(scan, self._angles, self._scan_max)
-        best, best_distance = -1, math.inf
+        best, best_distance = self._look_around, math.inf  # a turn in place is never vetoed
         for index, arc in enumerate(self._arcs):
             distance = math.hypot(arc[-1, 0] - forward, arc[-1, 1] - left)
             if distance < best_distance and not arc_vetoed(
                 arc, pose, points, segments, self._safe, self._bounds, self._radius
             ):
-                best, best_distance = index, distance
-        if best < 0:  # every primitive vetoed (only turns in place never are): cannot happen, but be safe
-            best = self._turn[1.0]
-        return np.int64(best)
+                best, best_distance = np.int64(index), distance
+        return best
 
     def executed(self, index: int) -> None:
         """A learner drove primitive ``index`` instead (DAgger): nothing to note, the planner reads the pose."""

@@ -11,6 +11,7 @@ import pytest
 
 import ekfslam_gym  # noqa: F401  (registers the env ids)
 from agents import AGENTS, BASELINES, FrontierAgent, make_agent
+from agents.base import wall_scan
 from agents.frontier import (
     FrontierPrimitivesPlanner,
     FrontierWaypointPlanner,
@@ -22,7 +23,7 @@ from agents.frontier import (
 )
 from agents.greedy.grid import update_walls
 from agents.greedy.rollout import arc_poses
-from agents.greedy.veto import arc_vetoed, scan_geometry
+from agents.greedy.veto import arc_vetoed, scan_geometry, to_world
 from ekfslam_gym.envs import EKFSLAMEnv
 from ekfslam_gym.envs.actions import PRIMITIVES
 
@@ -280,11 +281,8 @@ def _primitives_episode(seed, env_id="EKFSLAM-v0"):
         index = planner.act(observation)
         if len(planner._path):  # its arc ends nearest the path's point goal_distance ahead, among the allowed
             target = planner._path[planner._carrot_index(pose, planner.goal_distance)]
-            c, s = math.cos(pose[2]), math.sin(pose[2])
-            ends = np.array([[pose[0] + c * a[-1, 0] - s * a[-1, 1], pose[1] + s * a[-1, 0] + c * a[-1, 1]]
-                             for a in arcs])  # fmt: skip
-            scan = np.asarray(u.observation_layout.part(observation, "scan")) * cfg.sensor.scan_max_range
-            points, segments = scan_geometry(scan, planner._angles, planner._scan_max)
+            ends = np.array([to_world(a[-1:], pose)[0, :2] for a in arcs])
+            points, segments = scan_geometry(wall_scan(u, observation), planner._angles, planner._scan_max)
             allowed = [not arc_vetoed(a, pose, points, segments, planner._safe, planner._bounds, cfg.robot.radius)
                        for a in arcs]  # fmt: skip
             distance = np.where(allowed, np.hypot(*(ends - target).T), np.inf)

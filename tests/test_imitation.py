@@ -1,6 +1,6 @@
 """Planner-guided training: the greedy planner's demonstrations in the primitives interface and the frontier
-planner's in the waypoint and primitives interfaces, behaviour cloning into an SB3 policy (Discrete and Box actions), and the
-``pretrain`` switch of train.py's config. Never asserts learning quality on the env: cloning is checked on
+planner's in the waypoint and primitives interfaces, behaviour cloning into an SB3 policy (Discrete and Box
+actions), and the ``pretrain`` switch of train.py's config. Never asserts learning quality on the env: cloning is checked on
 synthetic tasks whose answers are known."""
 
 import json

@@ -58,9 +58,9 @@ def arc_vetoed(
     if ahead < safe and ahead < d[0]:
         return True
     world = to_world(rel, pose)
-    b = bounds
+    xmin, ymin, xmax, ymax = bounds
     margin = (
-        np.minimum.reduce([world[:, 0] - b[0], b[2] - world[:, 0], world[:, 1] - b[1], b[3] - world[:, 1]])
+        np.minimum.reduce([world[:, 0] - xmin, xmax - world[:, 0], world[:, 1] - ymin, ymax - world[:, 1]])
         - radius
     )
     return bool(margin[1:].min() < 0.0 and margin[1:].min() < margin[0])
