@@ -20,6 +20,13 @@ KINDS = [
 ]
 
 
+# Every optional reward term on (``control_effort`` reads the action, which a replay gives as the inner command).
+SHAPED = {
+    "a_opt": 0.3, "e_opt": 0.2, "control_effort": 0.1, "step_cost": 0.05, "map_variance": 40.0,
+    "pose_variance": 7.0, "coverage": 1.0,
+}  # fmt: skip
+
+
 def _actions(env: gym.Env, n: int, seed: int) -> list:
     env.action_space.seed(seed)
     return [env.action_space.sample() for _ in range(n)]
@@ -39,12 +46,13 @@ def test_every_kind_passes_sb3s_checker(action):
 
 
 @pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}")
-def test_a_macro_step_is_its_control_steps_summed_exactly(action):
+@pytest.mark.parametrize("reward", [{}, SHAPED], ids=["default", "shaped"])
+def test_a_macro_step_is_its_control_steps_summed_exactly(action, reward):
     """Replaying each macro step's inner actions one control step at a time gives the same filter state, and
     the macro reward is exactly the sum of those steps' rewards; each term, and the truth and belief gains, is the
-    sum of its inner ones."""
-    macro = EKFSLAMEnv(action=action, max_episode_steps=40)
-    single = EKFSLAMEnv(max_episode_steps=10_000)
+    sum of its inner ones (with the default reward, and with every optional term switched on)."""
+    macro = EKFSLAMEnv(action=action, max_episode_steps=40, reward=reward)
+    single = EKFSLAMEnv(max_episode_steps=10_000, reward=reward)
     macro.reset(seed=7)
     single.reset(seed=7)
     for a in _actions(macro, 40, seed=1):

@@ -179,6 +179,32 @@ def test_evaluation_reports_the_belief_truth_correlation_and_the_final_map_nees(
     assert row["map_nees"] == pytest.approx(nees / index.size, rel=1e-9)
 
 
+def test_pose_variance_reward_is_minus_its_weight_times_the_pose_position_variance():
+    """The optional ``pose_variance`` term costs weight x tr Sigma_xy of the pose estimate after each control step
+    (read against ``info["pose_cov"]`` and the filter's own covariance), the rest of the reward is unchanged,
+    and the cost grows while the robot explores without re-observing (dead reckoning between sightings)."""
+    weight = 7.0
+    plain = EKFSLAMEnv(max_episode_steps=60)
+    shaped = EKFSLAMEnv(max_episode_steps=60, reward={"pose_variance": weight})
+    plain.reset(seed=3)
+    shaped.reset(seed=3)
+    rng = np.random.default_rng(8)
+    costs = []
+    for _ in range(60):
+        a = rng.uniform(-1, 1, 2).astype(np.float32)
+        _, reward_plain, *_ = plain.step(a)
+        _, reward, terminated, truncated, info = shaped.step(a)
+        term = info["reward_terms"]["pose_variance"]
+        cov = np.asarray(shaped.filter.cov)
+        assert term == -weight * (cov[0, 0] + cov[1, 1])
+        assert term == -weight * (info["pose_cov"][0, 0] + info["pose_cov"][1, 1])
+        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
+        costs.append(term)
+        if terminated or truncated:
+            break
+    assert all(c < 0.0 for c in costs) and min(costs) < costs[0]  # a variance, and it grows somewhere
+
+
 @pytest.mark.parametrize("action", [{}, {"action": {"kind": "primitives", "hold": 10}}])
 def test_map_variance_reward_is_its_weight_times_the_belief_gain(action):
     """The optional ``map_variance`` term pays weight x ``info["belief_gain"]`` (summed over a macro step's inner

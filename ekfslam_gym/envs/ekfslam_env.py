@@ -84,7 +84,10 @@ class EKFSLAMEnv(gym.Env):
     ``coverage`` (w per m^2 the sensor looks at for the first time: an exploration shaping for training),
     ``map_variance`` (w times ``info["belief_gain"]``, the drop of the seen landmarks' summed position
     variances in m^2: it pays for revisits and loop closures that make the mapped part more accurate, never
-    for a discovery, since a landmark enters the sum only from the step after its first reading).
+    for a discovery, since a landmark enters the sum only from the step after its first reading),
+    ``pose_variance`` (-w tr Sigma_xy, the pose estimate's position variance in m^2, each control step: a cost
+    on being lost, which pays for staying localised and closing loops; landmarks first seen from an uncertain
+    pose are placed as uncertainly, so the map's absolute accuracy inherits it).
 
     Standing still earns little: every prediction adds odometry noise (the noise floor), a negative term, and
     re-observing the same landmarks pays ever less (the information about them grows like ln t). Because the
@@ -507,6 +510,10 @@ class EKFSLAMEnv(gym.Env):
 
     def _reward_map_variance(self, weight: float) -> float:
         return weight * self._belief_gain
+
+    def _reward_pose_variance(self, weight: float) -> float:
+        cov = self._belief[1]
+        return -weight * float(cov[0, 0] + cov[1, 1])
 
     def _reward_coverage(self, weight: float) -> float:
         return weight * self._newly_covered * self.config.observation.memory_resolution**2

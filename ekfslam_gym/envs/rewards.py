@@ -43,6 +43,13 @@ REWARD_TERMS: tuple[RewardTerm, ...] = (
         "a consistent filter's landmark RMSE follows, and nothing for a discovery; 0 by default",
     ),
     RewardTerm(
+        "pose_variance",
+        0.0,
+        "penalty per m^2 of the pose estimate's position variance tr Sigma_xy (x and y), per control step: "
+        "a cost on being lost, which an absolute map inherits (landmarks first seen from an uncertain pose are "
+        "placed as uncertainly), so it pays for staying localised and for closing loops; 0 by default",
+    ),
+    RewardTerm(
         "coverage",
         0.0,
         "bonus per m^2 of the world the sensor looks at for the first time (the coverage memory), an "
