@@ -29,6 +29,14 @@ landmark whose estimate has been out of the sensor's range and field of view the
 with ``revisit="uncertain"``, the one with the largest marginal covariance) until that landmark is within
 ``revisit_range`` m in the field of view, then picks the next, skipping the ``revisit_memory`` most recent.
 
+Active loop closing (Stachniss, Hahnel & Burgard 2004, "Exploration with active loop-closing for FastSLAM";
+off by default): with ``relocalize_std`` set, when the pose estimate's position standard deviation
+sqrt(tr Sigma_xy) exceeds it, the agent stops exploring and drives to the nearest (by path) seen landmark
+that is much more certain than the pose (marginal position std below ``anchor_ratio`` times the pose's), one
+after another, until the pose's std falls below ``relocalize_until`` times ``relocalize_std``. Exploring from
+an uncertain pose places every new landmark as uncertainly, so this trades landmarks seen for an accurate
+map.
+
 Uses only the belief: the filter's mean and covariance, the coverage memory, the wall scan, the config and the
 world's bounds; never the true map or pose.
 """
@@ -208,14 +216,18 @@ class FrontierAgent(Agent):
             than the current goal to replace it. join: m, scan end points closer than this are one wall.
             revisit_range: m within which a revisited landmark counts as seen again. revisit_memory: the most
             recently revisited landmarks not chosen again. revisit: ``"stalest"`` or ``"uncertain"``.
-            controller: keyword arguments of the ``WaypointController``.
+            controller: keyword arguments of the ``WaypointController``. relocalize_std: m of pose position
+            std above which the agent relocalises (None: never). relocalize_until: the fraction of
+            relocalize_std below which it explores again. anchor_ratio: a landmark helps relocalise when its
+            marginal position std is below this fraction of the pose's.
 
     The defaults are the best of one-at-a-time sweeps on training seeds 0-39 of EKFSLAM-v0 and
     EKFSLAM-Loop-v0 (mean final map log det): turn_cost 0-4 m/rad (0, pure path distance, turns back and forth
     between frontiers ahead and behind and sees 0.62 of the landmarks in EKFSLAM-v0), lookahead 0.75-3.5 m
     (longer cuts corners and leaves them unexplored), min_region 1-6, replan_every 3-30, switch_margin 0-3 m,
     stuck_steps 20-50, give_up_radius 1-2 m, revisit stalest or uncertain (stalest by 4 nats in EKFSLAM-v0
-    and 10 in the loop). Most settings besides turn_cost and lookahead were within 2 nats.
+    and 10 in the loop). Most settings besides turn_cost and lookahead were within 2 nats. Active loop
+    closing is off: on EKFSLAM-Large-v0 it trades map log det for landmark RMSE (docs/results.md).
     """
 
     name = "frontier"
@@ -236,6 +248,9 @@ class FrontierAgent(Agent):
         revisit_memory: int = 3,
         revisit: str = "stalest",
         controller: dict[str, Any] | None = None,
+        relocalize_std: float | None = None,
+        relocalize_until: float = 0.6,
+        anchor_ratio: float = 0.7,
     ) -> None:
         super().__init__()
         if min_region < 1 or replan_every < 1 or stuck_steps < 1 or lookahead <= 0 or patience <= 0:
@@ -243,6 +258,16 @@ class FrontierAgent(Agent):
                 "need min_region, replan_every, stuck_steps >= 1 and lookahead, patience > 0, got "
                 f"{min_region}, {replan_every}, {stuck_steps}, {lookahead}, {patience}"
             )
+        if relocalize_std is not None and not (
+            relocalize_std > 0 and 0 < relocalize_until < 1 and 0 < anchor_ratio <= 1
+        ):
+            raise ValueError(
+                "need relocalize_std > 0, 0 < relocalize_until < 1 and 0 < anchor_ratio <= 1, got "
+                f"{relocalize_std}, {relocalize_until}, {anchor_ratio}"
+            )
+        self.relocalize_std = None if relocalize_std is None else float(relocalize_std)
+        self.relocalize_until = float(relocalize_until)
+        self.anchor_ratio = float(anchor_ratio)
         self.min_region = int(min_region)
         self.replan_every = int(replan_every)
         self.turn_cost = float(turn_cost)
@@ -287,6 +312,7 @@ class FrontierAgent(Agent):
         self._anchor = (float(self.env.filter.pose[0]), float(self.env.filter.pose[1]))
         self._stalled = 0
         self.mode = "explore"
+        self._relocalizing = False
 
     # ------------------------------------------------------------------ geometry
     def _cell_of(self, x: float, y: float) -> tuple[int, int]:
@@ -320,10 +346,33 @@ class FrontierAgent(Agent):
         blocked = self._wall | self._given_up
         return frontier_regions(frontier_cells(memory, blocked), self.min_region)
 
+    def pose_std(self) -> float:
+        """The pose estimate's position standard deviation sqrt(tr Sigma_xy), m."""
+        cov = np.asarray(self.env.filter.pose_cov)
+        return math.sqrt(cov[0, 0] + cov[1, 1])
+
+    def _relocalize_switch(self) -> bool:
+        """Whether the pose's std has crossed the threshold that starts or ends relocalising."""
+        if self.relocalize_std is None:
+            return False
+        std = self.pose_std()
+        if self._relocalizing:
+            return std < self.relocalize_until * self.relocalize_std
+        return std > self.relocalize_std
+
     def _plan(self, pose: np.ndarray, scan: np.ndarray) -> None:
         sources = path_sources(self._wall, self._bounds, self._cell, pose, scan, self._angles)
         dist, parent = grid_paths(self._wall, sources, self._cell)
         self._since_plan = 0
+        if self._relocalize_switch():
+            self._relocalizing = not self._relocalizing
+            self._landmark = -1
+        if self._relocalizing:
+            self._goal = None
+            if self._plan_relocalize(pose, dist, parent):
+                self._index = 0
+                return
+            self._relocalizing = False  # no landmark certain enough to help: explore on
         candidates = self.frontiers() & np.isfinite(dist)
         every_landmark_seen = bool(np.all(np.asarray(self.env.filter.observed)))
         if candidates.any() and not every_landmark_seen:
@@ -353,36 +402,53 @@ class FrontierAgent(Agent):
         self._index = 0
 
     def _plan_revisit(self, pose: np.ndarray, dist: np.ndarray, parent: np.ndarray) -> None:
-        """No frontier left: drive to the seen landmark with the largest marginal covariance (trace)."""
+        """No frontier left: drive to the seen landmark out of view the longest (or the most uncertain)."""
         self.mode = "revisit"
+
+        def score(covs: np.ndarray, path: np.ndarray) -> np.ndarray:
+            if self.revisit == "uncertain":
+                return covs[:, 0, 0] + covs[:, 1, 1]
+            return self._t - self._last_view + 1.0
+
+        if not self._drive_to_landmark(pose, dist, parent, score):
+            self._path = np.zeros((0, 2))
+
+    def _plan_relocalize(self, pose: np.ndarray, dist: np.ndarray, parent: np.ndarray) -> bool:
+        """The pose is uncertain: drive to the nearest seen landmark much more certain than the pose. False
+        when there is none."""
+        self.mode = "relocalize"
+        limit = (self.anchor_ratio * self.pose_std()) ** 2
+
+        def score(covs: np.ndarray, path: np.ndarray) -> np.ndarray:
+            return np.where(covs[:, 0, 0] + covs[:, 1, 1] < limit, -path, -np.inf)
+
+        return self._drive_to_landmark(pose, dist, parent, score)
+
+    def _drive_to_landmark(self, pose: np.ndarray, dist: np.ndarray, parent: np.ndarray, score: Any) -> bool:
+        """Keep driving to the landmark being revisited while it is not yet in view; else pick the reachable
+        seen landmark (not among the most recent) with the highest ``score(covs, path lengths)``. Sets the
+        path; False when no landmark qualifies."""
         ekf = self.env.filter
-        observed = np.asarray(ekf.observed)
         landmarks = np.asarray(ekf.landmarks)
         if self._landmark < 0 or not self._landmark_pending(pose, landmarks):
             if self._landmark >= 0:
                 self._recent = (self._recent + [self._landmark])[-self.revisit_memory :]
-            covs = ekf.landmark_covs()
             cells = [self._cell_of(*p) for p in landmarks]
             path = np.array([dist[r, c] for r, c in cells])
-            value = (
-                covs[:, 0, 0] + covs[:, 1, 1]
-                if self.revisit == "uncertain"
-                else self._t - self._last_view + 1.0
-            )
-            score = np.full(len(landmarks), -np.inf)
-            ok = observed & np.isfinite(path)
-            score[ok] = value[ok]
-            score[self._recent] = -np.inf
-            if not np.isfinite(score).any():
+            value = np.full(len(landmarks), -np.inf)
+            ok = np.asarray(ekf.observed) & np.isfinite(path)
+            value[ok] = np.asarray(score(ekf.landmark_covs(), path), dtype=float)[ok]
+            value[self._recent] = -np.inf
+            if not np.isfinite(value).any():
                 self._landmark = -1
-                self._path = np.zeros((0, 2))
-                return
-            self._landmark = int(np.argmax(score))
+                return False
+            self._landmark = int(np.argmax(value))
             self._steps_on_goal = 0
             r, c = cells[self._landmark]
             self._budget = self.patience * (dist[r, c] + self._cell) / self._step_time + 2 * self.stuck_steps
         r, c = self._cell_of(*landmarks[self._landmark])
         self._path = self._path_to(parent, r, c)
+        return True
 
     def _landmark_pending(self, pose: np.ndarray, landmarks: np.ndarray) -> bool:
         """Whether the revisited landmark is not yet within revisit_range m in the field of view."""
@@ -412,7 +478,7 @@ class FrontierAgent(Agent):
             self._landmark = -1
 
     def _needs_plan(self, pose: np.ndarray) -> bool:
-        if self._since_plan >= self.replan_every or len(self._path) == 0:
+        if self._since_plan >= self.replan_every or len(self._path) == 0 or self._relocalize_switch():
             return True
         if self._goal is not None:
             memory, _ = coverage_and_bounds(self.env)
