@@ -225,6 +225,7 @@ def collect(
     else:
         stacked = np.stack(observations)
     meta = {"env_id": env_id, "env_kwargs": dict(env_kwargs or {}), "planner": planner,
+            "planner_kwargs": dict(planner_kwargs or {}),
             "driver": None if driver is None else getattr(driver, "name", type(driver).__name__)}  # fmt: skip
     labels = np.asarray(actions)
     labels = labels.astype(np.int64 if labels.dtype.kind in "iu" else np.float32)

@@ -28,6 +28,7 @@ from .demonstrations import PLANNERS, Demonstrations, check_seeds, collect, conc
 
 PRETRAIN_DEFAULTS: dict[str, Any] = {
     "planner": "greedy",  # the demonstrator (agents.demonstrations.PLANNERS)
+    "planner_kwargs": None,  # keyword arguments of the demonstrator, e.g. {relocalize_std: 0.2} for frontier
     "episodes": 200,  # demonstration episodes, one per seed from ``seed``
     "seed": 30000,  # first demonstration seed: a training range, clear of the held-out and evaluation seeds
     "epochs": 10,  # passes over the demonstrations
@@ -74,6 +75,9 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
         raise ValueError(f"pretrain.holdout must be a fraction in [0, 1), got {holdout!r}")
     if not isinstance(settings["value"], bool):
         raise ValueError(f"pretrain.value must be true or false, got {settings['value']!r}")
+    kwargs = settings["planner_kwargs"]
+    if kwargs is not None and not (isinstance(kwargs, Mapping) and all(isinstance(k, str) for k in kwargs)):
+        raise ValueError(f"pretrain.planner_kwargs must be a mapping of keyword arguments, got {kwargs!r}")
     if settings["path"] is not None and not isinstance(settings["path"], str):
         raise ValueError(f"pretrain.path must be a file name or null, got {settings['path']!r}")
     eval_seeds = range(0)
@@ -92,6 +96,15 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
                 f"pretrain.planner {settings['planner']!r} demonstrates in action.kind "
                 f"{' or '.join(map(repr, PLANNERS[settings['planner']]))}, but env_kwargs' action.kind is {kind!r}"
             )
+    else:
+        kind = PLANNERS[settings["planner"]][-1]
+    if kwargs:
+        from .demonstrations import make_planner
+
+        try:  # the constructor checks its own arguments (the env is needed only at reset)
+            make_planner(settings["planner"], kind, **kwargs)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"pretrain.planner_kwargs: {error}") from None
     return settings
 
 
@@ -299,6 +312,7 @@ def demonstrations_for(
         return demos
     start = int(entry.get("eval_seed", 20000))
     demos = collect(env_id, demonstration_seeds(settings), env_kwargs, planner=settings["planner"],
+                    planner_kwargs=settings["planner_kwargs"],
                     eval_seeds=range(start, start + int(entry.get("eval_episodes", 10))))  # fmt: skip
     save(demos, Path(out) / DEMONSTRATIONS_FILE)
     return demos
@@ -346,7 +360,8 @@ def pretrain(model: Any, env_id: str, entry: Mapping[str, Any], out: Path) -> di
     for round_ in range(settings["dagger_rounds"]):
         tick = time.perf_counter()
         more = collect(env_id, demonstration_seeds(settings, round_), dict(entry.get("env_kwargs") or {}),
-                       planner=settings["planner"], driver=PPOAgent(model=model, vecnormalize=normalizer),
+                       planner=settings["planner"], planner_kwargs=settings["planner_kwargs"],
+                       driver=PPOAgent(model=model, vecnormalize=normalizer),
                        eval_seeds=range(eval_start, eval_start + int(entry.get("eval_episodes", 10))))  # fmt: skip
         collected += time.perf_counter() - tick
         # The clone drove deterministically, so its accuracy on what it reached is its agreement with the planner.

@@ -123,6 +123,27 @@ def test_frontier_demonstrations_in_a_primitives_env_are_primitive_indices():
     assert np.all((demos.actions >= 0) & (demos.actions < len(PRIMITIVES)))
 
 
+def test_planner_kwargs_reach_the_demonstrator_and_are_recorded(monkeypatch):
+    """``pretrain.planner_kwargs`` (e.g. the frontier planner's active loop closing) builds the demonstrator, for
+    the first demonstrations and for DAgger's labels alike, and the demonstrations record them."""
+    built = []
+    original = demo_mod.make_planner
+
+    def spy(name, kind, **kwargs):
+        planner = original(name, kind, **kwargs)
+        built.append(planner)
+        return planner
+
+    monkeypatch.setattr(demo_mod, "make_planner", spy)
+    kwargs = {"relocalize_std": 0.25, "goal_distance": 1.25}
+    demos = collect("EKFSLAM-v0", [30000], PRIMITIVE_KWARGS, planner="frontier", planner_kwargs=kwargs)
+    driven = collect("EKFSLAM-v0", [30001], PRIMITIVE_KWARGS, planner="frontier", planner_kwargs=kwargs,
+                     driver=TurnInPlace())  # fmt: skip
+    assert [(p.relocalize_std, p.goal_distance) for p in built] == [(0.25, 1.25)] * 2
+    assert demos.meta["planner_kwargs"] == kwargs == driven.meta["planner_kwargs"]
+    assert collect("EKFSLAM-v0", [30000], PRIMITIVE_KWARGS).meta["planner_kwargs"] == {}
+
+
 def test_demonstration_seeds_avoid_the_held_out_and_evaluation_seeds():
     assert check_seeds(range(30000, 30003)) == [30000, 30001, 30002]
     for bad in ([10000], [10049], [20005], [-1]):
@@ -240,6 +261,14 @@ def test_pretrain_setting_validates():
     for planner, kwargs in (("frontier", {}), ("greedy", WAYPOINT_KWARGS), ("greedy", {})):
         with pytest.raises(ValueError, match="demonstrates in action.kind"):
             validate_pretrain({"planner": planner}, {"env_kwargs": kwargs})
+    relocalizing = {"planner": "frontier", "planner_kwargs": {"relocalize_std": 0.2}}
+    assert validate_pretrain(relocalizing, {"env_kwargs": PRIMITIVE_KWARGS})["planner_kwargs"] == {
+        "relocalize_std": 0.2
+    }
+    for bad, match in (({"relocalize_std": -1.0}, "relocalize_std"), ({"no_such": 1}, "no_such"),
+                       ([0.2], "mapping"), ({"clearance": 0.1}, "clearance")):  # fmt: skip
+        with pytest.raises(ValueError, match=f"planner_kwargs.*{match}|{match}.*planner_kwargs"):
+            validate_pretrain({"planner": "frontier", "planner_kwargs": bad}, {"env_kwargs": WAYPOINT_KWARGS})
 
 
 def test_train_settings_switch_is_checked_and_absent_means_none(tmp_path):
