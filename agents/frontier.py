@@ -227,7 +227,8 @@ class FrontierAgent(Agent):
     (longer cuts corners and leaves them unexplored), min_region 1-6, replan_every 3-30, switch_margin 0-3 m,
     stuck_steps 20-50, give_up_radius 1-2 m, revisit stalest or uncertain (stalest by 4 nats in EKFSLAM-v0
     and 10 in the loop). Most settings besides turn_cost and lookahead were within 2 nats. Active loop
-    closing is off: on EKFSLAM-Large-v0 it trades map log det for landmark RMSE (docs/results.md).
+    closing is off: on EKFSLAM-Large-v0 (seeds 20000-20019) it trades map log det for landmark RMSE, -182 /
+    0.13 m without it, -98 / 0.11 at 0.3 m, -36 / 0.098 at 0.2 m, +259 / 0.049 at 0.1 m.
     """
 
     name = "frontier"
