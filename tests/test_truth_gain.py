@@ -205,6 +205,49 @@ def test_pose_variance_reward_is_minus_its_weight_times_the_pose_position_varian
     assert all(c < 0.0 for c in costs) and min(costs) < costs[0]  # a variance, and it grows somewhere
 
 
+def _log_rms_std(env: EKFSLAMEnv) -> float:
+    """ln sqrt(mean tr Sigma_jj) over the slots the filter holds a landmark in, from its covariance; NaN if none."""
+    cov = np.asarray(env.filter.cov)
+    seen = np.flatnonzero(np.isfinite(_errors(env)))
+    if seen.size == 0:
+        return math.nan
+    traces = cov[3 + 2 * seen, 3 + 2 * seen] + cov[4 + 2 * seen, 4 + 2 * seen]
+    return 0.5 * math.log(traces.mean())
+
+
+@pytest.mark.parametrize("filter_", [{}, {"association": "nearest"}], ids=["known", "unknown"])
+def test_map_accuracy_reward_telescopes_to_the_log_ratio_of_the_expected_landmark_rmse(filter_):
+    """The optional ``map_accuracy`` term pays weight x the drop of ln sqrt(mean_j tr Sigma_jj) over the seen
+    landmarks (read against the filter's covariance), 0 until a landmark is seen, the rest of the reward is
+    unchanged, and over an episode the terms sum to weight x ln(R_first / R_final); a discovery placed less
+    certainly than the map so far costs, re-observations pay."""
+    weight = 30.0
+    plain = EKFSLAMEnv(max_episode_steps=120, filter=filter_)
+    shaped = EKFSLAMEnv(max_episode_steps=120, filter=filter_, reward={"map_accuracy": weight})
+    plain.reset(seed=5)
+    shaped.reset(seed=5)
+    first = previous = _log_rms_std(shaped)
+    total, terms = 0.0, []
+    for a in _held_actions(2, 120):
+        _, reward_plain, *_ = plain.step(a)
+        _, reward, terminated, truncated, info = shaped.step(a)
+        term = info["reward_terms"]["map_accuracy"]
+        now = _log_rms_std(shaped)
+        if math.isnan(previous):
+            assert term == 0.0
+            first = now
+        else:
+            assert term == pytest.approx(weight * (previous - now), rel=1e-9, abs=1e-12)
+        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
+        previous = now
+        total += term
+        terms.append(term)
+        if terminated or truncated:
+            break
+    assert total == pytest.approx(weight * (first - previous), rel=1e-9, abs=1e-9)
+    assert min(terms) < 0.0 < max(terms)  # both a costly discovery and a paying re-observation happened
+
+
 @pytest.mark.parametrize("action", [{}, {"action": {"kind": "primitives", "hold": 10}}])
 def test_map_variance_reward_is_its_weight_times_the_belief_gain(action):
     """The optional ``map_variance`` term pays weight x ``info["belief_gain"]`` (summed over a macro step's inner

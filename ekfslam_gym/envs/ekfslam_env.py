@@ -87,7 +87,11 @@ class EKFSLAMEnv(gym.Env):
     for a discovery, since a landmark enters the sum only from the step after its first reading),
     ``pose_variance`` (-w tr Sigma_xy, the pose estimate's position variance in m^2, each control step: a cost
     on being lost, which pays for staying localised and closing loops; landmarks first seen from an uncertain
-    pose are placed as uncertainly, so the map's absolute accuracy inherits it).
+    pose are placed as uncertainly, so the map's absolute accuracy inherits it),
+    ``map_accuracy`` (w times the drop of ln R, R = sqrt(mean_j tr Sigma_jj) over the landmarks seen, the
+    landmark RMSE a consistent filter expects; the terms sum to w ln(R_first / R_final) from the first step
+    with a landmark seen, so a discovery placed less certainly than the map so far costs and a loop closure
+    pays: beside ``info_gain``, which pays for certainty, it weighs the map's accuracy).
 
     Standing still earns little: every prediction adds odometry noise (the noise floor), a negative term, and
     re-observing the same landmarks pays ever less (the information about them grows like ln t). Because the
@@ -313,6 +317,7 @@ class EKFSLAMEnv(gym.Env):
         if self._belief_image:
             self._mark_walls()
         nees, rmse, _, self._worst_variance, seen, _, _ = self._step_metrics(read)
+        self._log_map_rms = self._log_map_rms_std() if weights.map_accuracy else math.nan
         info = self._info({"info_gain": 0.0}, nees, rmse, seen, 0.0, 0.0)
         if self.render_mode == "human":
             self.render()
@@ -514,6 +519,20 @@ class EKFSLAMEnv(gym.Env):
     def _reward_pose_variance(self, weight: float) -> float:
         cov = self._belief[1]
         return -weight * float(cov[0, 0] + cov[1, 1])
+
+    def _reward_map_accuracy(self, weight: float) -> float:
+        previous, self._log_map_rms = self._log_map_rms, self._log_map_rms_std()
+        if math.isnan(previous) or math.isnan(self._log_map_rms):
+            return 0.0  # no landmark seen yet: the sum starts at the first one
+        return weight * (previous - self._log_map_rms)
+
+    def _log_map_rms_std(self) -> float:
+        """ln sqrt(mean_j tr Sigma_jj) over the landmarks (slots) scored as seen by the last ``_step_metrics``,
+        whose ``_traces`` it reads; NaN when none is seen."""
+        seen = self._slot_valid if self._unknown else self._belief[2]
+        if not seen.any():
+            return math.nan
+        return 0.5 * math.log(float(self._traces[seen].mean()))
 
     def _reward_coverage(self, weight: float) -> float:
         return weight * self._newly_covered * self.config.observation.memory_resolution**2

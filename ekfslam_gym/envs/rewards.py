@@ -50,6 +50,14 @@ REWARD_TERMS: tuple[RewardTerm, ...] = (
         "placed as uncertainly), so it pays for staying localised and for closing loops; 0 by default",
     ),
     RewardTerm(
+        "map_accuracy",
+        0.0,
+        "weight per drop of ln R, R = sqrt(mean_j tr Sigma_jj) over the landmarks seen (the landmark RMSE a "
+        "consistent filter expects): telescopes to w ln(R_first / R_final), so it charges discoveries placed "
+        "less certainly than the map so far and pays loop closures; beside info_gain it weighs the map's "
+        "accuracy against its certainty; 0 by default",
+    ),
+    RewardTerm(
         "coverage",
         0.0,
         "bonus per m^2 of the world the sensor looks at for the first time (the coverage memory), an "
