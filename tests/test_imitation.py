@@ -441,3 +441,28 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_im
     assert wide == bonus
     assert bonus["env_kwargs"].pop("reward") == {"coverage": 1.0}
     assert bonus == base
+
+
+def test_the_shipped_large_model_records_the_relocalize_recipe_and_the_cnn_variant_differs_only_in_its_reader():
+    """models/ppo_EKFSLAM-Large-v0.zip was trained from configs/ppo_primitives_relocalize_bc.yaml as committed
+    (its record holds that entry, so the config reproduces it), and configs/ppo_belief_cnn_relocalize_bc.yaml
+    is that recipe with only the observation's reader changed: the belief image and the CNN extractor."""
+    import yaml
+
+    import train
+
+    def entry(name):
+        return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
+
+    mlp, cnn = entry("ppo_primitives_relocalize_bc"), entry("ppo_belief_cnn_relocalize_bc")
+    record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-Large-v0_config.yaml").read_text())
+    assert record["env_id"] == "EKFSLAM-Large-v0" and record["entry"] == mlp
+    assert mlp["pretrain"]["planner_kwargs"] == {"relocalize_std": 0.2}
+    assert mlp["env_kwargs"]["reward"] == {"collision": 5.0, "pose_variance": 8.0}
+    assert cnn["policy"] == "MultiInputPolicy" and mlp["policy"] == "MlpPolicy"
+    assert cnn["policy_kwargs"].pop("features_extractor_class") == "agents.extractors.BeliefCNN"
+    cnn["policy_kwargs"].pop("features_extractor_kwargs")
+    assert cnn["env_kwargs"].pop("observation")["belief_image"] is True
+    assert cnn["normalize"].pop("norm_obs_keys")
+    cnn["policy"] = mlp["policy"]
+    assert cnn == mlp
