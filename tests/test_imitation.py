@@ -443,10 +443,12 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_im
     assert bonus == base
 
 
-def test_the_shipped_large_model_records_the_relocalize_recipe_and_the_cnn_variant_differs_only_in_its_reader():
-    """models/ppo_EKFSLAM-Large-v0.zip was trained from configs/ppo_primitives_relocalize_bc.yaml as committed
-    (its record holds that entry, so the config reproduces it), and configs/ppo_belief_cnn_relocalize_bc.yaml
-    is that recipe with only the observation's reader changed: the belief image and the CNN extractor."""
+def test_the_shipped_large_model_records_its_recipe_and_the_variants_differ_only_where_named():
+    """models/ppo_EKFSLAM-Large-v0.zip was trained from configs/ppo_primitives_relocalize03_bc.yaml as committed
+    (its record holds that entry, so the config reproduces it); configs/ppo_primitives_relocalize_bc.yaml (the
+    recipe shipped before) differs from it only in the teacher's loop-closing threshold, and
+    configs/ppo_belief_cnn_relocalize_bc.yaml from that only in the observation's reader: the belief image and
+    the CNN extractor."""
     import yaml
 
     import train
@@ -454,11 +456,18 @@ def test_the_shipped_large_model_records_the_relocalize_recipe_and_the_cnn_varia
     def entry(name):
         return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
 
-    mlp, cnn = entry("ppo_primitives_relocalize_bc"), entry("ppo_belief_cnn_relocalize_bc")
+    shipped, mlp, cnn = (
+        entry("ppo_primitives_relocalize03_bc"),
+        entry("ppo_primitives_relocalize_bc"),
+        entry("ppo_belief_cnn_relocalize_bc"),
+    )
     record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-Large-v0_config.yaml").read_text())
-    assert record["env_id"] == "EKFSLAM-Large-v0" and record["entry"] == mlp
+    assert record["env_id"] == "EKFSLAM-Large-v0" and record["entry"] == shipped
+    assert shipped["env_kwargs"]["reward"] == {"collision": 5.0, "pose_variance": 8.0}
+    assert shipped["pretrain"]["planner_kwargs"] == {"relocalize_std": 0.3}
     assert mlp["pretrain"]["planner_kwargs"] == {"relocalize_std": 0.2}
-    assert mlp["env_kwargs"]["reward"] == {"collision": 5.0, "pose_variance": 8.0}
+    shipped["pretrain"]["planner_kwargs"] = {"relocalize_std": 0.2}
+    assert shipped == mlp
     assert cnn["policy"] == "MultiInputPolicy" and mlp["policy"] == "MlpPolicy"
     assert cnn["policy_kwargs"].pop("features_extractor_class") == "agents.extractors.BeliefCNN"
     cnn["policy_kwargs"].pop("features_extractor_kwargs")
