@@ -35,9 +35,7 @@ sqrt(tr Sigma_xy) exceeds it, the agent stops exploring and drives to the neares
 that is much more certain than the pose (marginal position std below ``anchor_ratio`` times the pose's), one
 after another, until the pose's std falls below ``relocalize_until`` times ``relocalize_std``. Exploring from
 an uncertain pose places every new landmark as uncertainly, so this trades landmarks seen for an accurate
-map. ``relocalize_schedule`` varies the threshold over the episode: ``[[0.0, 0.4], [0.7, 0.2]]`` relocalises
-above 0.4 m for the first 70 % of the episode's control steps and above 0.2 m after (``null``: not at all),
-so the agent can explore freely early and close loops before the episode ends, when the map is scored.
+map.
 
 Uses only the belief: the filter's mean and covariance, the coverage memory, the wall scan, the config and the
 world's bounds; never the true map or pose.
@@ -59,7 +57,7 @@ from ekfslam_gym.envs.waypoint import WaypointController
 
 from .base import Agent, beam_angles, clip_action, wall_scan
 from .greedy.grid import update_walls
-from .greedy.rollout import arc_poses, primitive_controls, rollout
+from .greedy.rollout import arc_poses
 from .greedy.veto import arc_vetoed, scan_geometry
 
 EIGHT_NEIGHBOURS = np.ones((3, 3), dtype=bool)
@@ -221,9 +219,7 @@ class FrontierAgent(Agent):
             controller: keyword arguments of the ``WaypointController``. relocalize_std: m of pose position
             std above which the agent relocalises (None: never). relocalize_until: the fraction of
             relocalize_std below which it explores again. anchor_ratio: a landmark helps relocalise when its
-            marginal position std is below this fraction of the pose's. relocalize_schedule: pairs
-            (fraction of the episode's control steps from which it applies, relocalize_std or None),
-            the first at fraction 0, in increasing order; replaces relocalize_std when given.
+            marginal position std is below this fraction of the pose's.
 
     The defaults are the best of one-at-a-time sweeps on training seeds 0-39 of EKFSLAM-v0 and
     EKFSLAM-Loop-v0 (mean final map log det): turn_cost 0-4 m/rad (0, pure path distance, turns back and forth
@@ -256,7 +252,6 @@ class FrontierAgent(Agent):
         relocalize_std: float | None = None,
         relocalize_until: float = 0.6,
         anchor_ratio: float = 0.7,
-        relocalize_schedule: Any = None,
     ) -> None:
         super().__init__()
         if min_region < 1 or replan_every < 1 or stuck_steps < 1 or lookahead <= 0 or patience <= 0:
@@ -264,15 +259,14 @@ class FrontierAgent(Agent):
                 "need min_region, replan_every, stuck_steps >= 1 and lookahead, patience > 0, got "
                 f"{min_region}, {replan_every}, {stuck_steps}, {lookahead}, {patience}"
             )
-        if not (0 < relocalize_until < 1 and 0 < anchor_ratio <= 1) or (
-            relocalize_std is not None and not relocalize_std > 0
+        if relocalize_std is not None and not (
+            relocalize_std > 0 and 0 < relocalize_until < 1 and 0 < anchor_ratio <= 1
         ):
             raise ValueError(
                 "need relocalize_std > 0, 0 < relocalize_until < 1 and 0 < anchor_ratio <= 1, got "
                 f"{relocalize_std}, {relocalize_until}, {anchor_ratio}"
             )
         self.relocalize_std = None if relocalize_std is None else float(relocalize_std)
-        self.relocalize_schedule = self._checked_schedule(relocalize_schedule, relocalize_std)
         self.relocalize_until = float(relocalize_until)
         self.anchor_ratio = float(anchor_ratio)
         self.min_region = int(min_region)
@@ -292,43 +286,9 @@ class FrontierAgent(Agent):
         self.revisit = revisit
         self.controller_kwargs = dict(controller or {})
 
-    @staticmethod
-    def _checked_schedule(
-        schedule: Any, relocalize_std: float | None
-    ) -> tuple[tuple[float, float | None], ...]:
-        """The schedule as ((start fraction, threshold or None), ...), from relocalize_std when not given."""
-        if schedule is None:
-            return ((0.0, None if relocalize_std is None else float(relocalize_std)),)
-        if relocalize_std is not None:
-            raise ValueError("give relocalize_std or relocalize_schedule, not both")
-        pairs = tuple((float(start), None if std is None else float(std)) for start, std in schedule)
-        starts = [start for start, _ in pairs]
-        if (
-            not pairs
-            or starts[0] != 0.0
-            or any(b <= a for a, b in zip(starts, starts[1:]))
-            or starts[-1] >= 1
-        ):
-            raise ValueError(
-                f"relocalize_schedule needs increasing start fractions in [0, 1) from 0, got {schedule}"
-            )
-        if any(std is not None and std <= 0 for _, std in pairs):
-            raise ValueError(f"relocalize_schedule's thresholds must be positive or null, got {schedule}")
-        return pairs
-
-    def _threshold(self) -> float | None:
-        """The relocalising threshold (m) in force now, from the schedule and the control steps driven."""
-        fraction = self._t / self._horizon
-        current = self.relocalize_schedule[0][1]
-        for start, std in self.relocalize_schedule:
-            if fraction >= start:
-                current = std
-        return current
-
     def reset(self, env: gym.Env, seed: int | None = None) -> None:
         super().reset(env, seed)
         cfg = self.env.config
-        self._horizon = float(cfg.max_episode_steps * cfg.action.steps)  # the episode's control steps
         memory, bounds = coverage_and_bounds(self.env)
         self._bounds = bounds
         self._cell = float(cfg.observation.memory_resolution)
@@ -394,13 +354,12 @@ class FrontierAgent(Agent):
 
     def _relocalize_switch(self) -> bool:
         """Whether the pose's std has crossed the threshold that starts or ends relocalising."""
-        threshold = self._threshold()
-        if threshold is None:
-            return self._relocalizing  # no loop closing in this phase: stop any under way
+        if self.relocalize_std is None:
+            return False
         std = self.pose_std()
         if self._relocalizing:
-            return std < self.relocalize_until * threshold
-        return std > threshold
+            return std < self.relocalize_until * self.relocalize_std
+        return std > self.relocalize_std
 
     def _plan(self, pose: np.ndarray, scan: np.ndarray) -> None:
         sources = path_sources(self._wall, self._bounds, self._cell, pose, scan, self._angles)
@@ -666,18 +625,12 @@ class FrontierPrimitivesPlanner(FrontierAgent):
 
     name = "frontier-primitives"
 
-    def __init__(
-        self, goal_distance: float = 1.5, clearance: float = 0.15, pose_weight: float = 0.0, **kwargs: Any
-    ) -> None:
+    def __init__(self, goal_distance: float = 1.5, clearance: float = 0.15, **kwargs: Any) -> None:
         super().__init__(**kwargs)
-        if not goal_distance > 0 or clearance < 0 or pose_weight < 0:
-            raise ValueError(
-                f"need goal_distance > 0, clearance >= 0 and pose_weight >= 0, got {goal_distance}, {clearance}, "
-                f"{pose_weight}"
-            )
+        if not goal_distance > 0 or clearance < 0:
+            raise ValueError(f"need goal_distance > 0 and clearance >= 0, got {goal_distance}, {clearance}")
         self.goal_distance = float(goal_distance)
         self.clearance = float(clearance)
-        self.pose_weight = float(pose_weight)
 
     def reset(self, env: gym.Env, seed: int | None = None) -> None:
         super().reset(env, seed)
@@ -695,27 +648,6 @@ class FrontierPrimitivesPlanner(FrontierAgent):
         self._radius = cfg.robot.radius
         self._look_around = np.int64(PRIMITIVES.index((0.0, 1.0)))  # turning left in place
         self._acted = False  # no macro step driven yet
-        if self.pose_weight > 0:
-            ekf = u.filter
-            noise = {
-                "odometry": cfg.odometry,
-                "velocity": u.world.velocity_noise,
-                "wheels": u.world.wheel_noise,
-            }
-            self._controls = [
-                primitive_controls(
-                    v * cfg.robot.v_max, w * cfg.robot.omega_max, cfg.dt, self._hold, ekf.motion_model,
-                    noise[ekf.motion_model],
-                )[:2]
-                for v, w in PRIMITIVES
-            ]  # fmt: skip
-            self._sensor = (max(cfg.sensor.min_range, ekf.min_range), cfg.sensor.max_range, cfg.sensor.fov)
-
-    def _expected_pose_std(self, index: int) -> float:
-        """The pose's position std (m) expected after primitive ``index``: the greedy planner's rollout."""
-        end = rollout(self.env.filter, *self._controls[index], *self._sensor)
-        cov = np.asarray(end.pose_cov)
-        return math.sqrt(cov[0, 0] + cov[1, 1])
 
     def act(self, observation: Any) -> np.int64:
         pose = np.asarray(self.env.filter.pose, dtype=float)
@@ -728,8 +660,6 @@ class FrontierPrimitivesPlanner(FrontierAgent):
         best, best_distance = self._look_around, math.inf  # a turn in place is never vetoed
         for index, arc in enumerate(self._arcs):
             distance = math.hypot(arc[-1, 0] - forward, arc[-1, 1] - left)
-            if self.pose_weight > 0 and distance < best_distance:
-                distance += self.pose_weight * self._expected_pose_std(index)
             if distance < best_distance and not arc_vetoed(
                 arc, pose, points, segments, self._safe, self._bounds, self._radius
             ):
