@@ -1,10 +1,13 @@
-"""Behaviour cloning of planner demonstrations into an SB3 PPO policy: the warm start of planner-guided training.
+"""Behaviour cloning of planner demonstrations into an SB3 PPO or sb3-contrib RecurrentPPO policy: the warm start of
+planner-guided training.
 
 Imitation first, then RL (issue 8): the policy is trained to choose the planner's action (the negative
 log-likelihood ``evaluate_actions`` gives under the policy's own distribution: cross-entropy on a primitives
 env's Discrete action, the diagonal Gaussian's on a waypoint env's Box goal; in shuffled minibatches over a few
-epochs), and optionally its value head to predict the discounted return the demonstrations earned, so that
-PPO's first advantages are not those of an untrained critic. Before that, the VecNormalize statistics are
+epochs; a recurrent policy reads whole episodes, so that its LSTM can learn what the planner remembers and the
+observation does not show, such as the frontier it heads for or that it is driving back to re-localise), and
+optionally its value head to predict the discounted return the demonstrations earned, so that PPO's first
+advantages are not those of an untrained critic. Before that, the VecNormalize statistics are
 fitted to the demonstrations (observations, and the discounted returns the reward normaliser divides by), so
 the policy is cloned on the inputs PPO fine-tuning will feed it.
 
@@ -32,7 +35,7 @@ PRETRAIN_DEFAULTS: dict[str, Any] = {
     "episodes": 200,  # demonstration episodes, one per seed from ``seed``
     "seed": 30000,  # first demonstration seed: a training range, clear of the held-out and evaluation seeds
     "epochs": 10,  # passes over the demonstrations
-    "batch_size": 256,
+    "batch_size": 256,  # pairs per minibatch; a recurrent policy's holds whole episodes, about as many pairs
     "learning_rate": 1.0e-3,  # Adam's, for cloning only (PPO keeps its own optimiser)
     "holdout": 0.1,  # fraction of the demonstration episodes held back to report accuracy on
     "value": True,  # also fit the value head to the demonstrations' discounted (normalised) returns
@@ -198,6 +201,86 @@ def split_episodes(
     return np.flatnonzero(~mask), np.flatnonzero(mask)
 
 
+def is_recurrent(policy: Any) -> bool:
+    """Whether ``policy`` is one of sb3-contrib's recurrent (LSTM) policies, which read whole sequences."""
+    return getattr(policy, "lstm_hidden_state_shape", None) is not None
+
+
+class PairBatches:
+    """Minibatches of single (observation, action) pairs, for a feed-forward policy: each is a flat array of
+    ``size`` pair indices (shuffled with ``rng``, in order without), an all-true mask, and no sequence count."""
+
+    def __init__(self, policy: Any, episodes: np.ndarray) -> None:
+        self.policy = policy
+
+    def minibatches(self, index: np.ndarray, size: int, rng: np.random.Generator | None):
+        order = index if rng is None else rng.permutation(index)
+        for first in range(0, len(order), size):
+            batch = order[first : first + size]
+            yield batch, np.ones(len(batch), dtype=bool), None
+
+    def evaluate(self, obs: Any, actions: Any, n_seq: None) -> tuple[Any, Any]:
+        values, log_prob, _ = self.policy.evaluate_actions(obs, actions)
+        return values, log_prob
+
+    def deterministic_actions(self, obs: Any, n_seq: None) -> np.ndarray:
+        return self.policy.get_distribution(obs).get_actions(deterministic=True).cpu().numpy()
+
+
+class SequenceBatches:
+    """Minibatches of whole episodes, for a recurrent policy: the LSTM must read an episode from its first step,
+    as it did when the planner's episode was driven. A batch of n episodes is an (n, T) array of pair indices,
+    flattened episode by episode as sb3-contrib's ``_process_sequence`` unflattens it; episodes shorter than the
+    longest, T, are padded with their last pair, and the mask excludes the padding (the LSTM is causal, so the
+    padding after an episode's end cannot change its earlier outputs). Every sequence starts from a zero LSTM
+    state, so no step is marked as an episode start and the LSTM runs over the batch in one call. A batch holds
+    about ``size`` pairs: ``size`` over the mean episode length, at least one episode."""
+
+    def __init__(self, policy: Any, episodes: np.ndarray) -> None:
+        self.policy = policy
+        self.episodes = episodes
+        order = np.argsort(episodes, kind="stable")  # pairs are stored in time order within an episode
+        ids, first = np.unique(episodes[order], return_index=True)
+        self.steps = dict(zip(ids.tolist(), np.split(order, first[1:])))
+
+    def minibatches(self, index: np.ndarray, size: int, rng: np.random.Generator | None):
+        ids = np.unique(self.episodes[index])
+        if rng is not None:
+            ids = rng.permutation(ids)
+        lengths = np.array([len(self.steps[k]) for k in ids.tolist()])
+        per_batch = max(1, int(round(size / max(float(np.mean(lengths)), 1.0)))) if len(ids) else 1
+        for first in range(0, len(ids), per_batch):
+            chosen = [self.steps[k] for k in ids[first : first + per_batch].tolist()]
+            longest = max(len(steps) for steps in chosen)
+            padded = np.stack([np.pad(steps, (0, longest - len(steps)), mode="edge") for steps in chosen])
+            mask = np.arange(longest)[None, :] < np.array([len(steps) for steps in chosen])[:, None]
+            yield padded.reshape(-1), mask.reshape(-1), len(chosen)
+
+    def _zero_states(self, n_seq: int) -> Any:
+        import torch
+        from sb3_contrib.common.recurrent.type_aliases import RNNStates
+
+        layers, _, hidden = self.policy.lstm_hidden_state_shape
+        zeros = torch.zeros((layers, n_seq, hidden), device=self.policy.device)
+        return RNNStates((zeros, zeros), (zeros, zeros))
+
+    def _starts(self, obs: Any) -> Any:
+        import torch
+
+        n = len(next(iter(obs.values()))) if isinstance(obs, Mapping) else len(obs)
+        return torch.zeros(n, device=self.policy.device)
+
+    def evaluate(self, obs: Any, actions: Any, n_seq: int) -> tuple[Any, Any]:
+        states = self._zero_states(n_seq)
+        values, log_prob, _ = self.policy.evaluate_actions(obs, actions, states, self._starts(obs))
+        return values, log_prob
+
+    def deterministic_actions(self, obs: Any, n_seq: int) -> np.ndarray:
+        states = self._zero_states(n_seq)
+        distribution, _ = self.policy.get_distribution(obs, states.pi, self._starts(obs))
+        return distribution.get_actions(deterministic=True).cpu().numpy()
+
+
 def behaviour_clone(
     model: Any,
     demos: Demonstrations,
@@ -210,7 +293,8 @@ def behaviour_clone(
     seed: int = 0,
     held: np.ndarray | None = None,
 ) -> CloneReport:
-    """Train ``model.policy`` (an SB3 actor-critic on a Discrete or Box action space) to choose the demonstrated
+    """Train ``model.policy`` (an SB3 actor-critic on a Discrete or Box action space, feed-forward or sb3-contrib's
+    recurrent one, which is trained on whole episodes: ``SequenceBatches``) to choose the demonstrated
     actions; the observations are normalised by the model's VecNormalize, if any (fit it first:
     ``fit_normalizer``). With ``value``, the value head also regresses the demonstrations' discounted returns
     (rewards normalised as the VecNormalize would, discounted with ``model.gamma``). ``held`` (bool per pair)
@@ -249,41 +333,47 @@ def behaviour_clone(
             return obs_as_tensor({k: v[index] for k, v in observations.items()}, policy.device)
         return obs_as_tensor(observations[index], policy.device)
 
+    batcher = (SequenceBatches if is_recurrent(policy) else PairBatches)(policy, demos.episodes)
+
     def accuracy(index: np.ndarray) -> float:
         if len(index) == 0:
             return float("nan")
-        with torch.no_grad():
-            chosen = policy.get_distribution(take(index)).get_actions(deterministic=True).cpu().numpy()
-        if discrete:
-            return float(np.mean(chosen.reshape(-1) == actions[index]))
-        low, high = model.action_space.low, model.action_space.high
-        return float(
-            np.mean(np.linalg.norm(np.clip(chosen, low, high) - actions[index], axis=1) <= BOX_MATCH)
-        )
+        matches = []
+        for batch, mask, n_seq in batcher.minibatches(index, 8192, None):
+            with torch.no_grad():
+                chosen = batcher.deterministic_actions(take(batch), n_seq)[mask]
+            wanted = actions[batch][mask]
+            if discrete:
+                matches.append(chosen.reshape(-1) == wanted)
+            else:
+                low, high = model.action_space.low, model.action_space.high
+                matches.append(np.linalg.norm(np.clip(chosen, low, high) - wanted, axis=1) <= BOX_MATCH)
+        return float(np.mean(np.concatenate(matches)))
 
     optimizer = torch.optim.Adam(policy.parameters(), lr=float(learning_rate))
     policy.set_training_mode(True)
     action_loss = value_loss = float("nan")
     for _ in range(int(epochs)):
-        order = rng.permutation(train_idx)
-        sums = np.zeros(2)
-        for first in range(0, len(order), int(batch_size)):
-            batch = order[first : first + int(batch_size)]
+        sums, pairs = np.zeros(2), 0
+        for batch, mask, n_seq in batcher.minibatches(train_idx, int(batch_size), rng):
             act = torch.as_tensor(actions[batch], device=policy.device)
-            values, log_prob, _ = policy.evaluate_actions(take(batch), act)
-            loss_a = -log_prob.mean()
+            values, log_prob = batcher.evaluate(take(batch), act, n_seq)
+            weight = torch.as_tensor(mask, dtype=log_prob.dtype, device=policy.device)
+            n = float(mask.sum())
+            loss_a = -(log_prob.flatten() * weight).sum() / n
             loss = loss_a
             loss_v = torch.zeros(())
             if value:
                 target = torch.as_tensor(targets[batch], dtype=values.dtype, device=policy.device)
-                loss_v = torch.nn.functional.mse_loss(values.flatten(), target)
+                loss_v = (((values.flatten() - target) ** 2) * weight).sum() / n
                 loss = loss + float(model.vf_coef) * loss_v
             optimizer.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(policy.parameters(), float(model.max_grad_norm))
             optimizer.step()
-            sums += [loss_a.item() * len(batch), loss_v.item() * len(batch)]
-        action_loss, value_loss = (sums / max(len(order), 1)).tolist()
+            sums += [loss_a.item() * n, loss_v.item() * n]
+            pairs += int(n)
+        action_loss, value_loss = (sums / max(pairs, 1)).tolist()
     policy.set_training_mode(False)
     return CloneReport(
         train_pairs=int(len(train_idx)), holdout_pairs=int(len(hold_idx)),

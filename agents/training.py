@@ -15,7 +15,7 @@ its keyword arguments) and ``env_kwargs``. The settings only this script knows s
 default, or ``ppo_lstm``, sb3-contrib's RecurrentPPO with ``policy: MlpLstmPolicy`` or ``MultiInputLstmPolicy``;
 ``agents.ppo.ALGOS``; rl-zoo3 takes it as ``--algo``) and ``pretrain`` (planner-guided training: a planner's
 demonstrations, greedy's or frontier's, cloned into the policy before PPO, ``agents.imitation``; absent means
-none, and a resumed run never clones again; ``ppo`` only). ``--hyperparams`` overrides either kind. Class names in
+none, and a resumed run never clones again; either algo). ``--hyperparams`` overrides either kind. Class names in
 ``policy_kwargs`` (``features_extractor_class``, ``activation_fn``, ``optimizer_class``) may be given dotted,
 e.g. ``agents.extractors.BeliefCNN`` or ``torch.nn.ReLU`` (``nn.ReLU`` too): they are imported when the model
 is built, and the record keeps the names. The output folder receives:
@@ -112,13 +112,10 @@ def load_entry(config_path: Path, env_id: str) -> dict[str, Any]:
 
 
 def check_algo(entry: dict[str, Any]) -> None:
-    """ValueError for an unknown ``algo``, or for behaviour cloning (``pretrain``) with a recurrent one: the
-    cloning trains a feed-forward policy on single observations (``agents.imitation``)."""
+    """ValueError for an unknown ``algo``."""
     algo = entry.get("algo", "ppo")
     if algo not in ALGOS:
         raise ValueError(f"algo must be one of {sorted(ALGOS)}, got {algo!r}")
-    if algo != "ppo" and entry.get("pretrain"):
-        raise ValueError(f"pretrain (behaviour cloning) supports algo ppo only, not {algo!r}")
 
 
 def import_dotted(name: str) -> Any:

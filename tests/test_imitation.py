@@ -239,6 +239,49 @@ def test_behaviour_cloning_learns_a_continuous_labelling():
         behaviour_clone(model, discrete, epochs=1)  # (N,) primitive indices for a Box(2) policy
 
 
+def cue_task(n_episodes=120, seed=0):
+    """Episodes of 8-24 steps whose every action is a cue shown only at the first step (one-hot in the first
+    three components; zeros afterwards, with the fourth component counting time): only a policy that remembers
+    the episode's start can clone it, a feed-forward one is right about a third of the time after the start."""
+    rng = np.random.default_rng(seed)
+    obs, actions, episodes = [], [], []
+    for k in range(n_episodes):
+        length, cue = int(rng.integers(8, 25)), int(rng.integers(3))
+        steps = np.zeros((length, 4), dtype=np.float32)
+        steps[0, cue] = 1.0
+        steps[:, 3] = np.arange(length) / 24.0
+        obs.append(steps)
+        actions.append(np.full(length, cue, dtype=np.int64))
+        episodes.append(np.full(length, k, dtype=np.int64))
+    obs, actions, episodes = np.concatenate(obs), np.concatenate(actions), np.concatenate(episodes)
+    return Demonstrations(obs, actions, rng.standard_normal(len(obs)), episodes, np.arange(n_episodes))
+
+
+def test_a_recurrent_policy_is_cloned_on_whole_episodes_and_remembers_their_start():
+    """RecurrentPPO's LSTM reads each episode from its first step (episodes of unequal length, padded and masked
+    in a batch), so it learns a labelling that only memory can give; the same cloning of a feed-forward policy
+    stays near chance, which shows the task needs the memory."""
+    import torch
+    from sb3_contrib import RecurrentPPO
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    torch.set_num_threads(1)
+    demos = cue_task()
+    recurrent = RecurrentPPO("MlpLstmPolicy", DummyVecEnv([LabelEnv]), seed=0, n_steps=32, batch_size=32,
+                             policy_kwargs={"lstm_hidden_size": 32, "net_arch": [32]})  # fmt: skip
+    flat = PPO("MlpPolicy", DummyVecEnv([LabelEnv]), seed=0, n_steps=32, batch_size=32)
+    reports = {}
+    for name, model in (("recurrent", recurrent), ("flat", flat)):
+        reports[name] = behaviour_clone(model, demos, epochs=30, batch_size=128, learning_rate=3e-3, seed=0)
+    rec, ff = reports["recurrent"], reports["flat"]
+    assert rec.holdout_episodes == 12 and rec.train_pairs + rec.holdout_pairs == len(demos)
+    assert (rec.train_pairs, rec.holdout_pairs) == (ff.train_pairs, ff.holdout_pairs)  # the same split
+    assert rec.train_accuracy > 0.9 and rec.holdout_accuracy > 0.9  # 1.0 when this was written
+    assert ff.holdout_accuracy < 0.6  # ~0.4 when this was written: a third, plus the first steps
+    assert np.isfinite(rec.value_loss) and rec.action_loss < 0.3
+
+
 def test_pretrain_setting_validates():
     assert validate_pretrain(None) is None and validate_pretrain(False) is None
     settings = validate_pretrain({"episodes": 5})
@@ -326,6 +369,29 @@ def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
     mismatch = [*reuse[:-1], "env_kwargs={action: {kind: primitives, hold: 5}, max_episode_steps: 8}"]
     with pytest.raises(ValueError, match="env_kwargs"):
         train.main(mismatch)
+
+
+def test_a_recurrent_config_clones_the_planner_with_a_dagger_round_at_smoke_size(tmp_path):
+    """configs/ppo_lstm.yaml with a ``pretrain`` section: RecurrentPPO is cloned on the greedy planner's
+    episodes, drives one DAgger round with its LSTM state, and is saved as a RecurrentPPO clone that evaluates."""
+    import train
+    from agents.ppo import PPOAgent
+    from ekfslam_gym.evaluation.episodes import evaluate_agent
+
+    out = tmp_path / "lstm"
+    train.main(["--config", "configs/ppo_lstm.yaml", "--timesteps", "64", "--out", str(out), "--seed", "0",
+                "--no-progress", "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1",
+                "eval_freq=0", "checkpoint_freq=0",
+                "pretrain={episodes: 2, epochs: 2, dagger_rounds: 1, dagger_episodes: 1}",
+                "env_kwargs={action: {kind: primitives, hold: 10}, max_episode_steps: 8}"])  # fmt: skip
+    record = json.loads((out / "pretrain.json").read_text())
+    assert record["pairs"] == 24 and len(record["rounds"]) == 2 and len(record["dagger_agreement"]) == 1
+    assert record["clone"]["holdout_episodes"] == 1 and 0 <= record["clone"]["holdout_accuracy"] <= 1
+    clone = PPOAgent(out / "bc_model.zip")
+    assert type(clone.model).__name__ == "RecurrentPPO" and clone.recurrent
+    kwargs = {"action": {"kind": "primitives", "hold": 10}, "max_episode_steps": 8}
+    first, again = (evaluate_agent(clone, "EKFSLAM-v0", [20000], kwargs)[0] for _ in range(2))
+    assert first["map_log_det"] == again["map_log_det"]  # deterministic, its LSTM state reset at each episode
 
 
 def _smoke_train(config, out, pretrain, action_kind):
