@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from .demonstrations import PLANNERS, Demonstrations, check_seeds, collect, concatenate, load, save
+from .ppo import is_recurrent
 
 PRETRAIN_DEFAULTS: dict[str, Any] = {
     "planner": "greedy",  # the demonstrator (agents.demonstrations.PLANNERS)
@@ -199,11 +200,6 @@ def split_episodes(
     held = rng.choice(ids, size=n_hold, replace=False) if n_hold else np.array([], dtype=ids.dtype)
     mask = np.isin(episodes, held)
     return np.flatnonzero(~mask), np.flatnonzero(mask)
-
-
-def is_recurrent(policy: Any) -> bool:
-    """Whether ``policy`` is one of sb3-contrib's recurrent (LSTM) policies, which read whole sequences."""
-    return getattr(policy, "lstm_hidden_state_shape", None) is not None
 
 
 class PairBatches:

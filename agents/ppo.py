@@ -154,8 +154,7 @@ class PPOAgent(Agent):
                     self.trained_env_kwargs = entry["env_kwargs"]
         self.model = model
         self.vecnormalize = vecnormalize
-        # sb3-contrib's recurrent policies (RecurrentPPO) have an LSTM state; plain PPO policies do not.
-        self.recurrent = getattr(model.policy, "lstm_hidden_state_shape", None) is not None
+        self.recurrent = is_recurrent(model.policy)
         self._state: Any = None
         self._episode_start = np.ones((1,), dtype=bool)
 
@@ -190,6 +189,12 @@ class PPOAgent(Agent):
 
     def __repr__(self) -> str:
         return f"PPOAgent(model_path={str(self.model_path)!r})"
+
+
+def is_recurrent(policy: Any) -> bool:
+    """Whether ``policy`` is one of sb3-contrib's recurrent (RecurrentPPO) policies: they carry an LSTM state
+    and read whole sequences; plain PPO policies do not."""
+    return getattr(policy, "lstm_hidden_state_shape", None) is not None
 
 
 def _shapes(space: gym.Space) -> Any:
