@@ -12,7 +12,9 @@ For the demonstrations to be imitable they must be in the policy's own interface
   primitive whose arc ends nearest that goal.
 
 ``collect`` drives the env with one and keeps the env's raw observations (before any VecNormalize), the chosen
-actions and the rewards; ``save``/``load`` keep them as ``.npz``.
+actions, the rewards and each reward term (``info["reward_terms"]``); ``save``/``load`` keep them as ``.npz``.
+The reward's weights change only the reward, never the trajectory, so ``reweighted`` gives the same
+demonstrations under another reward whose terms were recorded (a reward sweep collects them once).
 
 Seeds: demonstrations are training data, so their seeds must avoid the held-out suite (10000-10049) and the
 evaluation seeds that select models (20000 onwards by default); ``check_seeds`` says so with a clear error.
@@ -31,6 +33,7 @@ import gymnasium as gym
 import numpy as np
 
 from ekfslam_gym.envs.actions import PRIMITIVES
+from ekfslam_gym.envs.rewards import REWARD_NAMES
 from ekfslam_gym.evaluation.episodes import HELD_OUT_SEEDS
 
 from .base import wall_scan
@@ -152,7 +155,9 @@ class Demonstrations:
     ``observations`` is an array (N, ...) for a Box observation, a dict of them for a Dict observation (raw,
     as the env returns them); ``actions`` (N,) int64 primitive indices, or (N, 2) float32 waypoint goals;
     ``rewards`` (N,) float64, the env's reward for the step; ``episodes`` (N,) int64, the index into ``seeds``
-    of the pair's episode.
+    of the pair's episode; ``reward_terms`` the step's weighted terms by name (``info["reward_terms"]``, the
+    terms with a non-zero weight, whose weights ``meta["reward_weights"]`` records), empty in files written
+    before they were kept.
     """
 
     observations: Any
@@ -161,6 +166,7 @@ class Demonstrations:
     episodes: np.ndarray
     seeds: np.ndarray
     meta: dict[str, Any] = field(default_factory=dict)
+    reward_terms: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.actions)
@@ -198,6 +204,8 @@ def collect(
     env = gym.make(qualified, **dict(env_kwargs or {}))
     observations: list[Any] = []
     actions, rewards, episodes = [], [], []
+    weights = reward_weights(env.unwrapped.config)
+    terms: dict[str, list[float]] = {name: [] for name, weight in weights.items() if weight}
     try:
         agent = make_planner(planner, env.unwrapped.config.action.kind, **dict(planner_kwargs or {}))
         for k, seed in enumerate(seeds):
@@ -214,8 +222,10 @@ def collect(
                 observations.append(observation)
                 actions.append(label)
                 episodes.append(k)
-                observation, reward, terminated, truncated, _ = env.step(action)
+                observation, reward, terminated, truncated, info = env.step(action)
                 rewards.append(float(reward))
+                for name, values in terms.items():  # a failed filter step has reward 0 and no terms
+                    values.append(float(info["reward_terms"].get(name, 0.0)))
                 if terminated or truncated:
                     break
     finally:
@@ -226,11 +236,53 @@ def collect(
         stacked = np.stack(observations)
     meta = {"env_id": env_id, "env_kwargs": dict(env_kwargs or {}), "planner": planner,
             "planner_kwargs": dict(planner_kwargs or {}),
-            "driver": None if driver is None else getattr(driver, "name", type(driver).__name__)}  # fmt: skip
+            "driver": None if driver is None else getattr(driver, "name", type(driver).__name__),
+            "reward_weights": weights}  # fmt: skip
     labels = np.asarray(actions)
     labels = labels.astype(np.int64 if labels.dtype.kind in "iu" else np.float32)
     return Demonstrations(stacked, labels, np.array(rewards, dtype=np.float64),
-                          np.array(episodes, dtype=np.int64), np.array(seeds, dtype=np.int64), meta)  # fmt: skip
+                          np.array(episodes, dtype=np.int64), np.array(seeds, dtype=np.int64), meta,
+                          {name: np.array(values, dtype=np.float64) for name, values in terms.items()})  # fmt: skip
+
+
+def reward_weights(config: Any) -> dict[str, float]:
+    """Every reward term's weight in an env's ``EnvConfig`` (defaults included), by name."""
+    return {name: float(getattr(config.reward, name)) for name in REWARD_NAMES}
+
+
+def env_reward_weights(env_id: str, env_kwargs: Mapping[str, Any] | None = None) -> dict[str, float]:
+    """``reward_weights`` of the env ``gym.make(env_id, **env_kwargs)`` builds (its defaults filled in)."""
+    import ekfslam_gym  # noqa: F401  (registers the env ids)
+
+    env = gym.make(env_id if ":" in env_id else f"ekfslam_gym:{env_id}", **dict(env_kwargs or {}))
+    try:
+        return reward_weights(env.unwrapped.config)
+    finally:
+        env.close()
+
+
+def reweighted(demos: Demonstrations, weights: Mapping[str, float]) -> Demonstrations:
+    """``demos`` with the rewards the env would have given under ``weights`` (every term's weight by name, as
+    ``reward_weights``): each recorded term rescaled to its new weight and summed, in the env's order. Exact
+    because a weight only multiplies its term and never changes the trajectory. ValueError when the new reward
+    needs a term the demonstrations did not record (its weight was 0 there, or the file predates the terms)."""
+    recorded = {name: float(w) for name, w in demos.meta.get("reward_weights", {}).items()}
+    weights = {name: float(weights.get(name, 0.0)) for name in REWARD_NAMES}
+    if recorded == weights:
+        return demos
+    if not recorded:
+        raise ValueError("the demonstrations predate the recorded reward terms; collect them again")
+    missing = [name for name, w in weights.items() if w and name not in demos.reward_terms]
+    if missing:
+        raise ValueError(
+            f"the demonstrations did not record the reward terms {missing} that this run's reward weighs "
+            "(their weight was 0 when they were collected); collect them again, or collect once with every "
+            "term a reward sweep needs at a non-zero weight"
+        )
+    terms = {name: demos.reward_terms[name] * (w / recorded[name]) for name, w in weights.items() if w}
+    rewards = sum(terms.values(), np.zeros(len(demos.actions)))
+    return Demonstrations(demos.observations, demos.actions, rewards, demos.episodes, demos.seeds,
+                          {**demos.meta, "reward_weights": weights}, terms)  # fmt: skip
 
 
 def concatenate(first: Demonstrations, second: Demonstrations) -> Demonstrations:
@@ -246,6 +298,8 @@ def concatenate(first: Demonstrations, second: Demonstrations) -> Demonstrations
         np.concatenate([first.rewards, second.rewards]),
         np.concatenate([first.episodes, second.episodes + len(first.seeds)]),
         np.concatenate([first.seeds, second.seeds]), dict(first.meta),
+        {k: np.concatenate([v, second.reward_terms[k]]) for k, v in first.reward_terms.items()
+         if k in second.reward_terms},
     )  # fmt: skip
 
 
@@ -257,8 +311,9 @@ def save(demos: Demonstrations, path: str | Path) -> Path:
         obs = {f"obs/{k}": v for k, v in demos.observations.items()}
     else:
         obs = {"obs": demos.observations}
+    terms = {f"reward_terms/{k}": v for k, v in demos.reward_terms.items()}
     np.savez_compressed(path, actions=demos.actions, rewards=demos.rewards, episodes=demos.episodes,
-                        seeds=demos.seeds, meta=np.array(json.dumps(demos.meta)), **obs)  # fmt: skip
+                        seeds=demos.seeds, meta=np.array(json.dumps(demos.meta)), **obs, **terms)  # fmt: skip
     return path
 
 
@@ -269,5 +324,6 @@ def load(path: str | Path) -> Demonstrations:
             observations: Any = data["obs"]
         else:
             observations = {name[4:]: data[name] for name in data.files if name.startswith("obs/")}
+        terms = {name[13:]: data[name] for name in data.files if name.startswith("reward_terms/")}
         return Demonstrations(observations, data["actions"], data["rewards"], data["episodes"], data["seeds"],
-                              json.loads(str(data["meta"])))  # fmt: skip
+                              json.loads(str(data["meta"])), terms)  # fmt: skip

@@ -27,7 +27,17 @@ from typing import Any
 
 import numpy as np
 
-from .demonstrations import PLANNERS, Demonstrations, check_seeds, collect, concatenate, load, save
+from .demonstrations import (
+    PLANNERS,
+    Demonstrations,
+    check_seeds,
+    collect,
+    concatenate,
+    env_reward_weights,
+    load,
+    reweighted,
+    save,
+)
 from .ppo import is_recurrent
 
 PRETRAIN_DEFAULTS: dict[str, Any] = {
@@ -40,7 +50,7 @@ PRETRAIN_DEFAULTS: dict[str, Any] = {
     "learning_rate": 1.0e-3,  # Adam's, for cloning only (PPO keeps its own optimiser)
     "holdout": 0.1,  # fraction of the demonstration episodes held back to report accuracy on
     "value": True,  # also fit the value head to the demonstrations' discounted (normalised) returns
-    "path": None,  # a demonstrations .npz to reuse instead of collecting (it must match env id and env_kwargs)
+    "path": None,  # a demonstrations .npz to reuse instead of collecting (same env id and env_kwargs; a reward may differ)
     "dagger_rounds": 0,  # DAgger rounds after cloning: the clone drives, the planner labels, clone again
     "dagger_episodes": 50,  # episodes per DAgger round, on the seeds after seed + episodes (path: those too)
 }
@@ -384,17 +394,26 @@ def behaviour_clone(
 def demonstrations_for(
     env_id: str, entry: Mapping[str, Any], settings: Mapping[str, Any], out: Path
 ) -> Demonstrations:
-    """The run's demonstrations: ``settings["path"]`` if given (checked against the env id and env_kwargs), else
-    collected and saved in ``out`` as ``demonstrations.npz``."""
+    """The run's demonstrations: ``settings["path"]`` if given, else collected and saved in ``out`` as
+    ``demonstrations.npz``. A file must be of the run's env id and env_kwargs; only the ``reward`` may differ,
+    and then its rewards are recomputed under the run's weights (``reweighted``), since the weights change the
+    reward and never the trajectory."""
     env_kwargs = dict(entry.get("env_kwargs") or {})
     if settings.get("path"):
         demos = load(settings["path"])
         recorded = (demos.meta.get("env_id"), demos.meta.get("env_kwargs"))
-        if recorded != (env_id, env_kwargs):
+        if recorded == (env_id, env_kwargs):
+            return demos
+        if recorded[0] != env_id or _without_reward(recorded[1] or {}) != _without_reward(env_kwargs):
             raise ValueError(
                 f"{settings['path']} holds demonstrations of {recorded[0]} with env_kwargs {recorded[1]}, "
                 f"this run trains {env_id} with {env_kwargs}"
             )
+        try:
+            demos = reweighted(demos, env_reward_weights(env_id, env_kwargs))
+        except ValueError as error:
+            raise ValueError(f"{settings['path']}: {error}") from None
+        demos.meta.update(env_kwargs=env_kwargs, reweighted_from=str(settings["path"]))
         return demos
     start = int(entry.get("eval_seed", 20000))
     demos = collect(env_id, demonstration_seeds(settings), env_kwargs, planner=settings["planner"],
@@ -402,6 +421,10 @@ def demonstrations_for(
                     eval_seeds=range(start, start + int(entry.get("eval_episodes", 10))))  # fmt: skip
     save(demos, Path(out) / DEMONSTRATIONS_FILE)
     return demos
+
+
+def _without_reward(env_kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    return {k: v for k, v in env_kwargs.items() if k != "reward"}
 
 
 def pretrain(model: Any, env_id: str, entry: Mapping[str, Any], out: Path) -> dict[str, Any] | None:

@@ -43,6 +43,7 @@ def test_demonstrations_have_the_env_shapes_and_valid_planner_actions(tmp_path):
     loaded = demo_mod.load(demo_mod.save(demos, tmp_path / "d.npz"))
     for name in ("observations", "actions", "rewards", "episodes", "seeds"):
         assert np.array_equal(getattr(loaded, name), getattr(demos, name)), name
+    weights = loaded.meta.pop("reward_weights")
     assert loaded.meta == {
         "env_id": "EKFSLAM-v0",
         "env_kwargs": PRIMITIVE_KWARGS,
@@ -50,11 +51,42 @@ def test_demonstrations_have_the_env_shapes_and_valid_planner_actions(tmp_path):
         "planner_kwargs": {},
         "driver": None,
     }
+    # Every term with a weight is kept, and they sum to the reward.
+    assert (
+        set(loaded.reward_terms) == {name for name, w in weights.items() if w} == {"info_gain", "collision"}
+    )
+    for name, values in loaded.reward_terms.items():
+        assert np.array_equal(values, demos.reward_terms[name]), name
+    np.testing.assert_allclose(sum(loaded.reward_terms.values()), loaded.rewards, rtol=1e-12, atol=1e-12)
     # Deterministic: the same seeds give the same demonstrations.
     again = collect("EKFSLAM-v0", [30000, 30001], PRIMITIVE_KWARGS)
     assert np.array_equal(again.actions, demos.actions) and np.array_equal(
         again.observations, demos.observations
     )
+
+
+def test_reweighted_demonstrations_are_those_collected_under_the_other_reward():
+    recorded = {**PRIMITIVE_KWARGS, "reward": {"collision": 5.0, "pose_variance": 8.0}}
+    other = {**PRIMITIVE_KWARGS, "reward": {"info_gain": 0.5, "collision": 0.0, "pose_variance": 2.0}}
+    demos = collect("EKFSLAM-v0", [30000, 30001], recorded)
+    fresh = collect("EKFSLAM-v0", [30000, 30001], other)
+    assert not np.allclose(demos.rewards, fresh.rewards)  # the rewards differ, the trajectories do not
+    assert np.array_equal(demos.observations, fresh.observations) and np.array_equal(
+        demos.actions, fresh.actions
+    )
+    again = demo_mod.reweighted(demos, demo_mod.env_reward_weights("EKFSLAM-v0", other))
+    np.testing.assert_allclose(again.rewards, fresh.rewards, rtol=1e-9, atol=1e-12)
+    assert set(again.reward_terms) == set(fresh.reward_terms) == {"info_gain", "pose_variance"}
+    assert again.meta["reward_weights"] == fresh.meta["reward_weights"]
+    # The same weights give the same object; a term never recorded, or a file without terms, is refused.
+    assert demo_mod.reweighted(demos, demos.meta["reward_weights"]) is demos
+    needs = demo_mod.env_reward_weights("EKFSLAM-v0", {"reward": {"map_accuracy": 10.0}})
+    with pytest.raises(ValueError, match="map_accuracy"):
+        demo_mod.reweighted(demos, needs)
+    old = Demonstrations(demos.observations, demos.actions, demos.rewards, demos.episodes, demos.seeds,
+                         {k: v for k, v in demos.meta.items() if k != "reward_weights"})  # fmt: skip
+    with pytest.raises(ValueError, match="predate"):
+        demo_mod.reweighted(old, fresh.meta["reward_weights"])
 
 
 def test_planner_choices_are_the_greedy_agents_plan_from_the_belief():
@@ -369,6 +401,21 @@ def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
     mismatch = [*reuse[:-1], "env_kwargs={action: {kind: primitives, hold: 5}, max_episode_steps: 8}"]
     with pytest.raises(ValueError, match="env_kwargs"):
         train.main(mismatch)
+    # Another reward reuses them, its rewards recomputed; one needing a term they lack is refused.
+    kinds = "action: {kind: primitives, hold: 10}, max_episode_steps: 8"
+    rewarded = [
+        *reuse[:5],
+        str(tmp_path / "rewarded"),
+        *reuse[6:-1],
+        f"env_kwargs={{{kinds}, reward: {{collision: 3.0}}}}",
+    ]
+    train.main(rewarded)
+    dagger = demo_mod.load(tmp_path / "rewarded" / "dagger.npz")
+    assert dagger.meta["reward_weights"]["collision"] == 3.0 and dagger.meta["reweighted_from"] == str(path)
+    assert dagger.meta["env_kwargs"]["reward"] == {"collision": 3.0}
+    needs = [*rewarded[:-1], f"env_kwargs={{{kinds}, reward: {{coverage: 1.0}}}}"]
+    with pytest.raises(ValueError, match="coverage"):
+        train.main(needs)
 
 
 def test_a_recurrent_config_clones_the_planner_with_a_dagger_round_at_smoke_size(tmp_path):
