@@ -219,7 +219,11 @@ class FrontierAgent(Agent):
             controller: keyword arguments of the ``WaypointController``. relocalize_std: m of pose position
             std above which the agent relocalises (None: never). relocalize_until: the fraction of
             relocalize_std below which it explores again. anchor_ratio: a landmark helps relocalise when its
-            marginal position std is below this fraction of the pose's.
+            marginal position std is below this fraction of the pose's. home_weight: m of path cost per m that
+            a frontier lies from where the episode started (0: the nearest frontier; above 0 the map grows
+            outwards from the start, so the robot keeps the landmarks it mapped first in reach and its pose
+            stays localised at less coverage lost than relocalising costs; a teacher's setting, see
+            docs/results.md).
 
     The defaults are the best of one-at-a-time sweeps on training seeds 0-39 of EKFSLAM-v0 and
     EKFSLAM-Loop-v0 (mean final map log det): turn_cost 0-4 m/rad (0, pure path distance, turns back and forth
@@ -252,8 +256,12 @@ class FrontierAgent(Agent):
         relocalize_std: float | None = None,
         relocalize_until: float = 0.6,
         anchor_ratio: float = 0.7,
+        home_weight: float = 0.0,
     ) -> None:
         super().__init__()
+        if not home_weight >= 0:
+            raise ValueError(f"need home_weight >= 0, got {home_weight}")
+        self.home_weight = float(home_weight)
         if min_region < 1 or replan_every < 1 or stuck_steps < 1 or lookahead <= 0 or patience <= 0:
             raise ValueError(
                 "need min_region, replan_every, stuck_steps >= 1 and lookahead, patience > 0, got "
@@ -311,6 +319,7 @@ class FrontierAgent(Agent):
         self._steps_on_goal = 0
         self._budget = 0.0
         self._anchor = (float(self.env.filter.pose[0]), float(self.env.filter.pose[1]))
+        self._home = self._anchor
         self._stalled = 0
         self.mode = "explore"
         self._relocalizing = False
@@ -384,6 +393,8 @@ class FrontierAgent(Agent):
             ys = self._bounds[1] + (rows + 0.5) * self._cell
             turn = np.abs((np.arctan2(ys - pose[1], xs - pose[0]) - pose[2] + np.pi) % (2 * np.pi) - np.pi)
             cost = dist[rows, cols] + self.turn_cost * turn
+            if self.home_weight:
+                cost = cost + self.home_weight * np.hypot(xs - self._home[0], ys - self._home[1])
             best = int(np.argmin(cost))
             goal = (int(rows[best]), int(cols[best]))
             if self._goal is not None and self._goal != goal and candidates[self._goal]:

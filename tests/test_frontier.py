@@ -368,3 +368,34 @@ def test_active_loop_closing_relocalizes_on_a_certain_landmark_and_keeps_the_pos
         FrontierAgent(relocalize_std=0.0)
     with pytest.raises(ValueError, match="relocalize_std"):
         FrontierAgent(relocalize_std=0.2, relocalize_until=1.0)
+
+
+def _distance_and_std(seed, **kwargs):
+    """Mean distance of the pose estimate from the episode's start, and mean pose std, over a Large episode of
+    the primitives planner."""
+    env = gym.make("EKFSLAM-Large-v0", action={"kind": "primitives", "hold": 10}, max_episode_steps=100)
+    observation, _ = env.reset(seed=seed)
+    planner = FrontierPrimitivesPlanner(**kwargs)
+    planner.reset(env, seed=seed)
+    start = np.asarray(env.unwrapped.filter.pose, dtype=float)[:2].copy()
+    distances, stds = [], []
+    while True:
+        observation, _, terminated, truncated, _ = env.step(planner.act(observation))
+        distances.append(np.hypot(*(np.asarray(env.unwrapped.filter.pose)[:2] - start)))
+        stds.append(planner.pose_std())
+        if terminated or truncated:
+            break
+    env.close()
+    return np.mean(distances), np.mean(stds)
+
+
+def test_home_weight_grows_the_map_outwards_from_the_start_and_keeps_the_pose_certain():
+    """Frontiers far from the start cost ``home_weight`` m per m: seeded Large episodes stay nearer the start
+    and keep the pose more certain than nearest-frontier exploration (when this was written: 8-12 m against
+    15-27 m, pose std 0.04-0.14 m against 0.38-0.44 m at home_weight 1)."""
+    for seed in (0, 1):
+        near, near_std = _distance_and_std(seed, home_weight=1.0)
+        free, free_std = _distance_and_std(seed)
+        assert near < 0.7 * free and near_std < 0.5 * free_std, (seed, near, free, near_std, free_std)
+    with pytest.raises(ValueError, match="home_weight"):
+        FrontierAgent(home_weight=-0.1)
