@@ -25,7 +25,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -204,7 +204,7 @@ def collect(
     env = gym.make(qualified, **dict(env_kwargs or {}))
     observations: list[Any] = []
     actions, rewards, episodes = [], [], []
-    weights = reward_weights(env.unwrapped.config)
+    weights = asdict(env.unwrapped.config.reward)  # every term's weight, defaults included
     terms: dict[str, list[float]] = {name: [] for name, weight in weights.items() if weight}
     try:
         agent = make_planner(planner, env.unwrapped.config.action.kind, **dict(planner_kwargs or {}))
@@ -245,25 +245,21 @@ def collect(
                           {name: np.array(values, dtype=np.float64) for name, values in terms.items()})  # fmt: skip
 
 
-def reward_weights(config: Any) -> dict[str, float]:
-    """Every reward term's weight in an env's ``EnvConfig`` (defaults included), by name."""
-    return {name: float(getattr(config.reward, name)) for name in REWARD_NAMES}
-
-
 def env_reward_weights(env_id: str, env_kwargs: Mapping[str, Any] | None = None) -> dict[str, float]:
-    """``reward_weights`` of the env ``gym.make(env_id, **env_kwargs)`` builds (its defaults filled in)."""
+    """Every reward term's weight, by name, in the env ``gym.make(env_id, **env_kwargs)`` builds (the env id's
+    preset and the defaults filled in)."""
     import ekfslam_gym  # noqa: F401  (registers the env ids)
 
     env = gym.make(env_id if ":" in env_id else f"ekfslam_gym:{env_id}", **dict(env_kwargs or {}))
     try:
-        return reward_weights(env.unwrapped.config)
+        return asdict(env.unwrapped.config.reward)
     finally:
         env.close()
 
 
 def reweighted(demos: Demonstrations, weights: Mapping[str, float]) -> Demonstrations:
     """``demos`` with the rewards the env would have given under ``weights`` (every term's weight by name, as
-    ``reward_weights``): each recorded term rescaled to its new weight and summed, in the env's order. Exact
+    ``env_reward_weights``): each recorded term rescaled to its new weight and summed, in the env's order. Exact
     because a weight only multiplies its term and never changes the trajectory. ValueError when the new reward
     needs a term the demonstrations did not record (its weight was 0 there, or the file predates the terms)."""
     recorded = {name: float(w) for name, w in demos.meta.get("reward_weights", {}).items()}
