@@ -53,9 +53,16 @@ PRETRAIN_DEFAULTS: dict[str, Any] = {
     "path": None,  # a demonstrations .npz to reuse instead of collecting (same env id and env_kwargs; a reward may differ)
     "dagger_rounds": 0,  # DAgger rounds after cloning: the clone drives, the planner labels, clone again
     "dagger_episodes": 50,  # episodes per DAgger round, on the seeds after seed + episodes (path: those too)
+    "keep_cloning": None,  # cloning steps kept up during PPO (agents.keep_cloning): {batches, learning_rate, decay}
+}
+KEEP_CLONING_DEFAULTS: dict[str, Any] = {
+    "batches": 8,  # minibatches of the demonstrations after each rollout, one Adam step each
+    "learning_rate": 3.0e-5,  # Adam's rate for them at the first rollout
+    "decay": 1.0,  # the rate's factor per rollout (DAPG's lambda_1); 1 holds the clone near its teacher throughout
 }
 BOX_MATCH = 0.1  # a cloned Box action within this distance of the planner's counts as a match (accuracy)
 DEMONSTRATIONS_FILE = "demonstrations.npz"
+DAGGER_FILE = "dagger.npz"  # the demonstrations and every DAgger round's pairs, when there were rounds
 BC_MODEL = "bc_model"  # the cloned policy, before any PPO update, saved with its statistics in the run folder
 
 
@@ -94,6 +101,7 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
         raise ValueError(f"pretrain.planner_kwargs must be a mapping of keyword arguments, got {kwargs!r}")
     if settings["path"] is not None and not isinstance(settings["path"], str):
         raise ValueError(f"pretrain.path must be a file name or null, got {settings['path']!r}")
+    settings["keep_cloning"] = validate_keep_cloning(settings["keep_cloning"])
     eval_seeds = range(0)
     if entry is not None:
         start = int(entry.get("eval_seed", 20000))
@@ -119,6 +127,33 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
             make_planner(settings["planner"], kind, **kwargs)
         except (TypeError, ValueError) as error:
             raise ValueError(f"pretrain.planner_kwargs: {error}") from None
+    return settings
+
+
+def validate_keep_cloning(value: Any) -> dict[str, Any] | None:
+    """``pretrain.keep_cloning`` with its defaults filled in, or None when absent or false."""
+    if value is None or value is False:
+        return None
+    if value is True:
+        value = {}
+    if not isinstance(value, Mapping):
+        raise ValueError(
+            f"pretrain.keep_cloning must be a mapping of {sorted(KEEP_CLONING_DEFAULTS)}, got {value!r}"
+        )
+    unknown = sorted(set(value) - set(KEEP_CLONING_DEFAULTS))
+    if unknown:
+        raise ValueError(
+            f"unknown pretrain.keep_cloning keys {unknown}; known: {sorted(KEEP_CLONING_DEFAULTS)}"
+        )
+    settings = {**KEEP_CLONING_DEFAULTS, **value}
+    batches = settings["batches"]
+    if isinstance(batches, bool) or not isinstance(batches, int) or batches < 1:
+        raise ValueError(f"pretrain.keep_cloning.batches must be an integer >= 1, got {batches!r}")
+    rate, decay = settings["learning_rate"], settings["decay"]
+    if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not rate > 0:
+        raise ValueError(f"pretrain.keep_cloning.learning_rate must be a positive number, got {rate!r}")
+    if isinstance(decay, bool) or not isinstance(decay, (int, float)) or not 0 < decay <= 1:
+        raise ValueError(f"pretrain.keep_cloning.decay must be in (0, 1], got {decay!r}")
     return settings
 
 
@@ -481,7 +516,7 @@ def pretrain(model: Any, env_id: str, entry: Mapping[str, Any], out: Path) -> di
         demos = concatenate(demos, more)
         reports.append(clone(settings["epochs"]))
     if settings["dagger_rounds"]:
-        save(demos, out / "dagger.npz")
+        save(demos, out / DAGGER_FILE)
     save_with_stats(model, out / BC_MODEL, out)
     record = {"settings": dict(settings), "pairs": len(demos), "episodes": int(len(demos.seeds)),
               "demonstration_seconds": collected, "clone": asdict(reports[-1]),

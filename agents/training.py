@@ -15,7 +15,8 @@ its keyword arguments) and ``env_kwargs``. The settings only this script knows s
 default, or ``ppo_lstm``, sb3-contrib's RecurrentPPO with ``policy: MlpLstmPolicy`` or ``MultiInputLstmPolicy``;
 ``agents.ppo.ALGOS``; rl-zoo3 takes it as ``--algo``) and ``pretrain`` (planner-guided training: a planner's
 demonstrations, greedy's or frontier's, cloned into the policy before PPO, ``agents.imitation``; absent means
-none, and a resumed run never clones again; either algo). ``--hyperparams`` overrides either kind. Class names in
+none, and a resumed run never clones again; either algo; its ``keep_cloning`` keeps cloning steps up between
+PPO's updates, resumed runs included, ``agents.keep_cloning``). ``--hyperparams`` overrides either kind. Class names in
 ``policy_kwargs`` (``features_extractor_class``, ``activation_fn``, ``optimizer_class``) may be given dotted,
 e.g. ``agents.extractors.BeliefCNN`` or ``torch.nn.ReLU`` (``nn.ReLU`` too): they are imported when the model
 is built, and the record keeps the names. The output folder receives:
@@ -419,6 +420,10 @@ def train(
         print(f"resuming {out} from {done} steps ({remaining} to go)", file=sys.stderr)
 
     callbacks = build_callbacks(out, entry, eval_env, n_envs)
+    if entry["pretrain"] is not None and entry["pretrain"]["keep_cloning"]:
+        from .keep_cloning import keep_cloning_callback  # imports torch and SB3
+
+        callbacks.append(keep_cloning_callback(model, out, entry["pretrain"]))
     if remaining > 0:
         model.learn(total_timesteps=remaining, callback=callbacks, progress_bar=progress,
                     reset_num_timesteps=reset, tb_log_name=entry["algo"])  # fmt: skip

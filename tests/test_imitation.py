@@ -544,6 +544,7 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_im
     assert record["pretrain"]["path"].endswith("demonstrations.npz") and frontier["pretrain"]["path"] is None
     record["pretrain"]["path"] = None
     record["pretrain"].setdefault("planner_kwargs", None)  # recorded before the key existed
+    record["pretrain"].setdefault("keep_cloning", None)  # likewise
     assert record == frontier
     assert frontier["pretrain"]["planner"] == "frontier" and wide["pretrain"]["planner"] == "greedy"
     assert (frontier["gamma"], wide["gamma"]) == (0.995, 0.98)
@@ -575,6 +576,7 @@ def test_the_shipped_large_model_records_its_recipe_and_the_variants_differ_only
         entry("ppo_belief_cnn_relocalize_bc"),
     )
     record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-Large-v0_config.yaml").read_text())
+    record["entry"]["pretrain"].setdefault("keep_cloning", None)  # recorded before the key existed
     assert record["env_id"] == "EKFSLAM-Large-v0" and record["entry"] == shipped
     assert shipped["env_kwargs"]["reward"] == {"collision": 5.0, "pose_variance": 8.0}
     assert shipped["pretrain"]["planner_kwargs"] == {"relocalize_std": 0.3}
