@@ -558,11 +558,12 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_im
 
 
 def test_the_shipped_large_model_records_its_recipe_and_the_variants_differ_only_where_named():
-    """models/ppo_EKFSLAM-Large-v0.zip was trained from configs/ppo_primitives_relocalize03_bc.yaml as committed
-    (its record holds that entry, so the config reproduces it); configs/ppo_primitives_relocalize_bc.yaml (the
-    recipe shipped before) differs from it only in the teacher's loop-closing threshold, and
-    configs/ppo_belief_cnn_relocalize_bc.yaml from that only in the observation's reader: the belief image and
-    the CNN extractor."""
+    """models/ppo_EKFSLAM-Large-v0.zip was trained from configs/ppo_primitives_home_keep_bc.yaml (its record holds
+    that entry, less where its demonstrations were read: a file the same settings had collected), which differs
+    from configs/ppo_primitives_relocalize03_bc.yaml (the recipe shipped before) only in the teacher's settings
+    and the cloning kept up during fine-tuning; that one from configs/ppo_primitives_relocalize_bc.yaml only in
+    the teacher's loop-closing threshold, and configs/ppo_belief_cnn_relocalize_bc.yaml from that only in the
+    observation's reader: the belief image and the CNN extractor."""
     import yaml
 
     import train
@@ -570,14 +571,22 @@ def test_the_shipped_large_model_records_its_recipe_and_the_variants_differ_only
     def entry(name):
         return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
 
-    shipped, mlp, cnn = (
+    home, shipped, mlp, cnn = (
+        entry("ppo_primitives_home_keep_bc"),
         entry("ppo_primitives_relocalize03_bc"),
         entry("ppo_primitives_relocalize_bc"),
         entry("ppo_belief_cnn_relocalize_bc"),
     )
     record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-Large-v0_config.yaml").read_text())
-    record["entry"]["pretrain"].setdefault("keep_cloning", None)  # recorded before the key existed
-    assert record["env_id"] == "EKFSLAM-Large-v0" and record["entry"] == shipped
+    assert record["env_id"] == "EKFSLAM-Large-v0"
+    assert home["pretrain"]["path"] is None
+    assert record["entry"]["pretrain"].pop("path").endswith("demonstrations.npz")
+    record["entry"]["pretrain"]["path"] = None
+    assert record["entry"] == home
+    assert home["pretrain"]["planner_kwargs"] == {"home_weight": 0.5}
+    assert home["pretrain"]["keep_cloning"] == {"batches": 8, "learning_rate": 3.0e-5, "decay": 0.97}
+    home["pretrain"].update(planner_kwargs={"relocalize_std": 0.3}, keep_cloning=None)
+    assert home == shipped
     assert shipped["env_kwargs"]["reward"] == {"collision": 5.0, "pose_variance": 8.0}
     assert shipped["pretrain"]["planner_kwargs"] == {"relocalize_std": 0.3}
     assert mlp["pretrain"]["planner_kwargs"] == {"relocalize_std": 0.2}
