@@ -66,22 +66,28 @@ DAGGER_FILE = "dagger.npz"  # the demonstrations and every DAgger round's pairs,
 BC_MODEL = "bc_model"  # the cloned policy, before any PPO update, saved with its statistics in the run folder
 
 
-def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
-    """The ``pretrain`` setting with its defaults filled in, or None when absent or false; ValueError naming
-    the key for anything else. With ``entry``, the demonstration seeds are also checked against its
-    evaluation seeds (``eval_seed`` onwards, ``eval_episodes`` of them)."""
+def with_defaults(value: Any, defaults: Mapping[str, Any], name: str) -> dict[str, Any] | None:
+    """A settings section ``name`` over its ``defaults``: None when absent or false, all defaults when true,
+    else the mapping's keys over the defaults; ValueError for anything else or for a key not in ``defaults``."""
     if value is None or value is False:
         return None
     if value is True:
         value = {}
     if not isinstance(value, Mapping):
-        raise ValueError(
-            f"pretrain must be a mapping of {sorted(PRETRAIN_DEFAULTS)} (or absent), got {value!r}"
-        )
-    unknown = sorted(set(value) - set(PRETRAIN_DEFAULTS))
+        raise ValueError(f"{name} must be a mapping of {sorted(defaults)} (or absent), got {value!r}")
+    unknown = sorted(set(value) - set(defaults))
     if unknown:
-        raise ValueError(f"unknown pretrain keys {unknown}; known: {sorted(PRETRAIN_DEFAULTS)}")
-    settings = {**PRETRAIN_DEFAULTS, **value}
+        raise ValueError(f"unknown {name} keys {unknown}; known: {sorted(defaults)}")
+    return {**defaults, **value}
+
+
+def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
+    """The ``pretrain`` setting with its defaults filled in, or None when absent or false; ValueError naming
+    the key for anything else. With ``entry``, the demonstration seeds are also checked against its
+    evaluation seeds (``eval_seed`` onwards, ``eval_episodes`` of them)."""
+    settings = with_defaults(value, PRETRAIN_DEFAULTS, "pretrain")
+    if settings is None:
+        return None
     if settings["planner"] not in PLANNERS:
         raise ValueError(f"pretrain.planner must be one of {list(PLANNERS)}, got {settings['planner']!r}")
     for key, low in (("episodes", 1), ("seed", 0), ("epochs", 1), ("batch_size", 1), ("dagger_rounds", 0),
@@ -132,20 +138,9 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
 
 def validate_keep_cloning(value: Any) -> dict[str, Any] | None:
     """``pretrain.keep_cloning`` with its defaults filled in, or None when absent or false."""
-    if value is None or value is False:
+    settings = with_defaults(value, KEEP_CLONING_DEFAULTS, "pretrain.keep_cloning")
+    if settings is None:
         return None
-    if value is True:
-        value = {}
-    if not isinstance(value, Mapping):
-        raise ValueError(
-            f"pretrain.keep_cloning must be a mapping of {sorted(KEEP_CLONING_DEFAULTS)}, got {value!r}"
-        )
-    unknown = sorted(set(value) - set(KEEP_CLONING_DEFAULTS))
-    if unknown:
-        raise ValueError(
-            f"unknown pretrain.keep_cloning keys {unknown}; known: {sorted(KEEP_CLONING_DEFAULTS)}"
-        )
-    settings = {**KEEP_CLONING_DEFAULTS, **value}
     batches = settings["batches"]
     if isinstance(batches, bool) or not isinstance(batches, int) or batches < 1:
         raise ValueError(f"pretrain.keep_cloning.batches must be an integer >= 1, got {batches!r}")
