@@ -16,6 +16,7 @@ KINDS = [
     {"kind": "velocity", "hold": 5},
     {"kind": "primitives"},
     {"kind": "primitives", "hold": 3},
+    {"kind": "primitives", "guard": 0.2},
     {"kind": "waypoint"},
 ]
 
@@ -32,20 +33,20 @@ def _actions(env: gym.Env, n: int, seed: int) -> list:
     return [env.action_space.sample() for _ in range(n)]
 
 
-@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}")
+@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}-{a.get('guard', 0)}")
 def test_every_kind_passes_gymnasiums_checker(action):
     from gymnasium.utils.env_checker import check_env
 
     check_env(gym.make("EKFSLAM-v0", action=action, max_episode_steps=30).unwrapped, skip_render_check=True)
 
 
-@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}")
+@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}-{a.get('guard', 0)}")
 def test_every_kind_passes_sb3s_checker(action):
     env_checker = pytest.importorskip("stable_baselines3.common.env_checker")
     env_checker.check_env(EKFSLAMEnv(action=action, max_episode_steps=30), warn=True)
 
 
-@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}")
+@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}-{a.get('guard', 0)}")
 @pytest.mark.parametrize("reward", [{}, SHAPED], ids=["default", "shaped"])
 def test_a_macro_step_is_its_control_steps_summed_exactly(action, reward):
     """Replaying each macro step's inner actions one control step at a time gives the same filter state, and
@@ -92,7 +93,7 @@ def test_information_gain_telescopes_over_macro_steps():
     assert info["step"] == 200
 
 
-@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}")
+@pytest.mark.parametrize("action", KINDS, ids=lambda a: f"{a['kind']}-{a.get('hold')}-{a.get('guard', 0)}")
 def test_rollouts_are_deterministic(action):
     def rollout():
         env = gym.make("EKFSLAM-v0", action=action, max_episode_steps=25)
@@ -129,11 +130,17 @@ def test_bad_action_configs_name_the_field():
         EKFSLAMEnv(action={"kind": "primitives", "hold": 0})
     with pytest.raises(ValueError, match="action.waypoint_radius"):
         EKFSLAMEnv(action={"kind": "waypoint", "waypoint_radius": -1.0})
+    for bad in (-0.1, float("nan"), "0.2"):
+        with pytest.raises(ValueError, match="action.guard"):
+            EKFSLAMEnv(action={"kind": "primitives", "guard": bad})
+    for kind in ("velocity", "waypoint"):
+        with pytest.raises(ValueError, match="action.guard applies to action.kind primitives only"):
+            EKFSLAMEnv(action={"kind": kind, "guard": 0.2})
 
 
-def _open_arena(**action):
+def _open_arena(kind="waypoint", **action):
     """An arena with the start pose far from every wall (the layout's start is random)."""
-    env = EKFSLAMEnv(action={"kind": "waypoint", **action}, world={"layout": "arena"}, max_episode_steps=200)
+    env = EKFSLAMEnv(action={"kind": kind, **action}, world={"layout": "arena"}, max_episode_steps=200)
     for seed in range(50):
         env.reset(seed=seed)
         x, y, _ = env.world.pose
@@ -172,3 +179,33 @@ def test_a_waypoint_behind_a_wall_stops_short_of_it():
     assert collisions == 0
     assert xmax - x < 1.5  # it drove up to the wall ...
     assert xmax - x > env.config.robot.radius  # ... and stopped short of it
+
+
+def _gap_to_walls(env) -> float:
+    """m between the robot's disc and the nearest of the arena's four walls (the world's bounds)."""
+    x, y, _ = env.world.pose
+    xmin, ymin, xmax, ymax = env.bounds
+    return min(x - xmin, xmax - x, y - ymin, ymax - y) - env.config.robot.radius
+
+
+@pytest.mark.parametrize("guard", [0.1, 0.3])
+def test_a_guarded_primitive_stops_short_of_the_wall_ahead(guard):
+    """Driving straight on from a start 5 m from every wall: unguarded the robot runs into a wall and scrapes
+    it; guarded it stops about ``guard`` short of it, turning without driving, and never touches it."""
+    unguarded = _open_arena("primitives")
+    contacts = sum(unguarded.step(np.int64(0))[4]["collision"] for _ in range(60))
+    assert contacts > 0
+
+    env = _open_arena("primitives", guard=guard)
+    start = env.world.pose.copy()
+    contacts, infos = 0, []
+    for _ in range(60):
+        infos.append(env.step(np.int64(0))[4])
+        contacts += infos[-1]["collision"]
+    assert contacts == 0
+    assert np.linalg.norm(env.world.pose[:2] - start[:2]) > 3.0  # it drove to the wall ...
+    step = env.config.robot.v_max * env.config.dt
+    assert 0.5 * guard < _gap_to_walls(env) < guard + 2 * step  # ... and stopped short of it
+    assert np.all(infos[-1]["inner_actions"] == 0.0)  # a straight primitive that is blocked stands still
+    info = env.step(np.int64(3))[4]  # a blocked arc keeps its turn, and drives on once it has turned clear
+    assert tuple(info["inner_actions"][0]) == (0.0, np.float32(PRIMITIVES[3][1])) and not info["collision"]

@@ -236,12 +236,16 @@ class ActionConfig:
     kind: ``velocity`` (the (forward, turn) command), ``primitives`` (one of the greedy planner's motion
     primitives, ``Discrete``) or ``waypoint`` (a goal relative to the estimated pose, driven by a scan-only
     controller). hold: control steps per env step, at most for a waypoint (default 1 for velocity, 10 for the
-    others). waypoint_radius: m, the reach of a waypoint goal (the action's unit).
+    others). waypoint_radius: m, the reach of a waypoint goal (the action's unit). guard: m, primitives only: a
+    control step whose forward travel would bring the robot within this distance of a wall the scan shows
+    ahead turns without driving forward, so the robot stops short of walls instead of sliding along them (a
+    contact costs the odometry a slip; 0, the default, is off).
     """
 
     kind: str = "velocity"
     hold: int | None = None
     waypoint_radius: float = 3.0
+    guard: float = 0.0
 
     def __post_init__(self) -> None:
         _require(
@@ -250,6 +254,9 @@ class ActionConfig:
         if self.hold is not None:
             _integer("action.hold", self.hold, 1)
         _positive("action.waypoint_radius", self.waypoint_radius)
+        _non_negative("action.guard", self.guard)
+        _require(self.guard == 0 or self.kind == "primitives", "action.guard", "applies to action.kind primitives "
+                 f"only (a waypoint's controller stops short of walls itself), not {self.kind!r}", self.guard)  # fmt: skip
 
     @property
     def steps(self) -> int:
