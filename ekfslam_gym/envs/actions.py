@@ -135,7 +135,7 @@ class MotionPrimitives(ActionInterface):
         # Nothing the scan shows can stop the step when every beam ends farther than this: the disc reaches a
         # wall point r m away only after r - radius m, and a joined segment lies at most join / 2 nearer.
         self._far = (
-            0.0 if controller is None else controller.radius + controller.join + self.guard + self.step
+            0.0 if controller is None else controller.radius + 0.5 * controller.join + self.guard + self.step
         )
 
     def begin(self, action: Any, pose_estimate: np.ndarray) -> None:
@@ -159,7 +159,7 @@ class MotionPrimitives(ActionInterface):
             scan = scan_of()
             if (
                 scan.min() < self._far
-                and self.controller.clearances(scan)[0] < self.guard + forward * self.step
+                and self.controller.clearance_ahead(scan) < self.guard + forward * self.step
             ):
                 return 0.0, turn
         return self._command

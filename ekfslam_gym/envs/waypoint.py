@@ -228,7 +228,13 @@ class WaypointController:
         ahead, behind, _ = self._clearances(scan)
         return ahead, behind
 
-    def _clearances(self, scan: Any) -> tuple[float, float, float]:
+    def clearance_ahead(self, scan: Any) -> float:
+        """``clearances(scan)[0]`` alone (half the work): the room ahead, for the primitives' guard."""
+        ranges, hit, xs, ys = self._endpoints(scan)
+        return travel_distance(xs, ys, hit, self._rho, self.join)
+
+    def _endpoints(self, scan: Any) -> tuple[list[float], list[bool], list[float], list[float]]:
+        """The scan's ranges, which beams hit a wall, and their end points in the robot's frame."""
         ranges = scan.tolist() if hasattr(scan, "tolist") else list(scan)
         if len(ranges) != self.n_beams:
             raise ValueError(f"scan must have {self.n_beams} beams, got {len(ranges)}")
@@ -236,6 +242,10 @@ class WaypointController:
         hit = [r < limit for r in ranges]
         xs = [r * c for r, c in zip(ranges, self._cos)]
         ys = [r * s for r, s in zip(ranges, self._sin)]
+        return ranges, hit, xs, ys
+
+    def _clearances(self, scan: Any) -> tuple[float, float, float]:
+        ranges, hit, xs, ys = self._endpoints(scan)
         ahead = travel_distance(xs, ys, hit, self._rho, self.join)
         behind = travel_distance([-x for x in xs], ys, hit, self._rho, self.join)
         nearest = min((r for r, h in zip(ranges, hit) if h), default=INF)
