@@ -209,3 +209,25 @@ def test_a_guarded_primitive_stops_short_of_the_wall_ahead(guard):
     assert np.all(infos[-1]["inner_actions"] == 0.0)  # a straight primitive that is blocked stands still
     info = env.step(np.int64(3))[4]  # a blocked arc keeps its turn, and drives on once it has turned clear
     assert tuple(info["inner_actions"][0]) == (0.0, np.float32(PRIMITIVES[3][1])) and not info["collision"]
+
+
+def test_the_guards_skip_bound_changes_no_decision():
+    """The guard skips the room-ahead check when the scan's nearest wall is too far to matter; checking at every
+    forward step instead drives the same commands, step for step, near walls and away from them."""
+    for seed in range(3):
+        envs = [
+            EKFSLAMEnv(action={"kind": "primitives", "guard": 0.3}, max_episode_steps=150) for _ in range(2)
+        ]
+        envs[1]._interface._far = math.inf  # always measure the room ahead
+        for env in envs:
+            env.reset(seed=seed)
+        blocked = 0
+        for a in _actions(envs[0], 150, seed=seed):
+            outs = [env.step(a) for env in envs]
+            inner = [out[4]["inner_actions"] for out in outs]
+            assert np.array_equal(inner[0], inner[1])
+            if PRIMITIVES[int(a)][0] > 0.0:  # a forward primitive that the guard stopped for some steps
+                blocked += int(np.sum(inner[0][:, 0] == 0.0))
+            if outs[0][2] or outs[0][3]:
+                break
+        assert blocked > 0  # the drive came near walls, so the check was exercised

@@ -41,9 +41,9 @@ class EKFSLAMEnv(gym.Env):
     the ``action`` section offers macro actions, each driven for up to ``action.hold`` control steps
     (``ekfslam_gym.envs.actions``): ``primitives``, ``Discrete(9)``, one of the greedy planner's motion
     primitives (``PRIMITIVES``), held (with ``action.guard`` m, a control step that would bring the robot
-    within that distance of a wall the scan shows ahead keeps only its turn); ``waypoint``, ``Box(-1, 1, (2,))``,
-    a goal (forward, left) x
-    ``action.waypoint_radius`` m from the estimated pose, driven by a controller that sees only the pose
+    within that distance of a wall the scan shows ahead keeps only its turn); ``waypoint``,
+    ``Box(-1, 1, (2,))``, a goal (forward, left) x ``action.waypoint_radius`` m from the estimated pose,
+    driven by a controller that sees only the pose
     estimate and the wall scan, until reached, blocked by a wall, or ``hold`` steps. A macro step's reward is
     the sum of its control steps' rewards; ``info["reward_terms"]`` sums each term over them, and
     ``info["inner_steps"]`` and ``info["inner_actions"]`` say what ran.
