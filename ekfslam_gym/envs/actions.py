@@ -113,30 +113,12 @@ class HeldVelocity(ActionInterface):
 
 
 class MotionPrimitives(ActionInterface):
-    """One of ``PRIMITIVES`` by index, held. With a ``guard`` (m) and the ``controller`` whose scan geometry
-    measures the room ahead, a control step whose forward travel (``step`` m at full speed) would bring the
-    robot within ``guard`` of a wall the scan shows ahead keeps only the primitive's turn: the robot stops short
-    of the wall, as a waypoint does, instead of sliding along it (each contact step costs the wheel odometry a
-    slip of 0.35 m per m commanded, ``WheelOdometryNoise``)."""
+    """One of ``PRIMITIVES`` by index, held."""
 
-    def __init__(
-        self, guard: float = 0.0, controller: WaypointController | None = None, step: float = 0.0
-    ) -> None:
-        if guard and controller is None:
-            raise ValueError(
-                "a guarded primitives interface needs the controller that measures the room ahead"
-            )
+    def __init__(self) -> None:
         self.space = gym.spaces.Discrete(len(PRIMITIVES))
         self._index = 0
         self._command = PRIMITIVES[0]
-        self.guard = float(guard)
-        self.controller = controller
-        self.step = float(step)
-        # Nothing the scan shows can stop the step when every beam ends farther than this: the disc reaches a
-        # wall point r m away only after r - radius m, and a joined segment lies at most join / 2 nearer.
-        self._far = (
-            0.0 if controller is None else controller.radius + 0.5 * controller.join + self.guard + self.step
-        )
 
     def begin(self, action: Any, pose_estimate: np.ndarray) -> None:
         index = np.asarray(action)
@@ -154,8 +136,28 @@ class MotionPrimitives(ActionInterface):
         out[self._index] = 1.0
 
     def command(self, pose_estimate: np.ndarray, scan_of: Callable[[], np.ndarray]) -> tuple[float, float]:
+        return self._command
+
+
+class GuardedPrimitives(MotionPrimitives):
+    """``MotionPrimitives`` with ``action.guard``: a control step whose forward travel (``step`` m at full speed)
+    would bring the robot within ``guard`` m of a wall the scan shows ahead, as ``controller`` measures the room
+    ahead, keeps only the primitive's turn. The robot stops short of the wall, as a waypoint does, instead of
+    sliding along it (each contact step costs the wheel odometry a slip of 0.35 m per m commanded,
+    ``WheelOdometryNoise``). A class of its own, so that unguarded primitives pay nothing for it."""
+
+    def __init__(self, guard: float, controller: WaypointController, step: float) -> None:
+        super().__init__()
+        self.guard = float(guard)
+        self.controller = controller
+        self.step = float(step)
+        # Nothing the scan shows can stop the step when every beam ends farther than this: the disc reaches a
+        # wall point r m away only after r - radius m, and a joined segment lies at most join / 2 nearer.
+        self._far = controller.radius + 0.5 * controller.join + self.guard + self.step
+
+    def command(self, pose_estimate: np.ndarray, scan_of: Callable[[], np.ndarray]) -> tuple[float, float]:
         forward, turn = self._command
-        if self.guard and forward > 0.0:
+        if forward > 0.0:
             scan = scan_of()
             if (
                 scan.min() < self._far
@@ -201,5 +203,5 @@ def make_interface(config) -> ActionInterface:
         if not config.action.guard:
             return MotionPrimitives()
         controller = WaypointController.from_config(config, margin=0.0)
-        return MotionPrimitives(config.action.guard, controller, config.robot.v_max * config.dt)
+        return GuardedPrimitives(config.action.guard, controller, config.robot.v_max * config.dt)
     return Waypoint(WaypointController.from_config(config), config.action.waypoint_radius)

@@ -43,8 +43,8 @@ class EKFSLAMEnv(gym.Env):
     primitives (``PRIMITIVES``), held (with ``action.guard`` m, a control step that would bring the robot
     within that distance of a wall the scan shows ahead keeps only its turn); ``waypoint``,
     ``Box(-1, 1, (2,))``, a goal (forward, left) x ``action.waypoint_radius`` m from the estimated pose,
-    driven by a controller that sees only the pose
-    estimate and the wall scan, until reached, blocked by a wall, or ``hold`` steps. A macro step's reward is
+    driven by a controller that sees only the pose estimate and the wall scan, until reached, blocked by a
+    wall, or ``hold`` steps. A macro step's reward is
     the sum of its control steps' rewards; ``info["reward_terms"]`` sums each term over them, and
     ``info["inner_steps"]`` and ``info["inner_actions"]`` say what ran.
 
