@@ -280,3 +280,42 @@ def test_map_variance_reward_is_its_weight_times_the_belief_gain(action):
     assert nonzero > 0 and total > 0.0  # marginal variances of seen landmarks only fall in an EKF
     if not action:  # with macro steps a landmark's first sight falls between the observed steps
         assert total == pytest.approx(weight * np.nansum(first - _traces(shaped)), rel=1e-9, abs=1e-12)
+
+
+def _placed_nats(env: EKFSLAMEnv) -> float:
+    """sum_j ln(1 + s^4 / det Sigma_jj) over the slots the filter holds, each 2x2 block's det by numpy."""
+    from ekfslam_gym.envs.rewards import QUALITY_STD
+
+    cov = np.asarray(env.filter.cov)
+    total = 0.0
+    for j in np.flatnonzero(np.asarray(env.filter.observed)):
+        block = cov[3 + 2 * j : 5 + 2 * j, 3 + 2 * j : 5 + 2 * j]
+        total += math.log1p(QUALITY_STD**4 / np.linalg.det(block))
+    return total
+
+
+@pytest.mark.parametrize("filter_", [{}, {"association": "nearest"}], ids=["known", "unknown"])
+def test_map_quality_reward_telescopes_to_the_gain_of_the_placed_landmarks_nats(filter_):
+    """The optional ``map_quality`` term pays weight x the rise of Q = sum_j ln(1 + s^4 / det Sigma_jj) over the
+    landmarks held (numpy's determinant of each 2x2 block here), the rest of the reward is unchanged, and over
+    an episode the terms sum to weight x (Q_final - Q_first)."""
+    weight = 3.0
+    plain = EKFSLAMEnv(max_episode_steps=120, filter=filter_)
+    shaped = EKFSLAMEnv(max_episode_steps=120, filter=filter_, reward={"map_quality": weight})
+    plain.reset(seed=5)
+    shaped.reset(seed=5)
+    first = previous = _placed_nats(shaped)
+    total = 0.0
+    for a in _held_actions(2, 120):
+        _, reward_plain, *_ = plain.step(a)
+        _, reward, terminated, truncated, info = shaped.step(a)
+        term = info["reward_terms"]["map_quality"]
+        now = _placed_nats(shaped)
+        assert term == pytest.approx(weight * (now - previous), rel=1e-9, abs=1e-9)
+        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
+        previous = now
+        total += term
+        if terminated or truncated:
+            break
+    assert previous > first > 0.0  # landmarks were seen at the start and more were placed since
+    assert total == pytest.approx(weight * (previous - first), rel=1e-9, abs=1e-9)
