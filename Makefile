@@ -64,6 +64,7 @@ bench: install  # bench/graph.py compares with GTSAM when the bench extra is ins
 	$(BIN)/python bench/train.py
 	$(BIN)/python bench/graph.py
 	$(BIN)/python bench/decisions.py
+	$(BIN)/python bench/actions.py
 
 lint: install
 	$(BIN)/ruff check . && $(BIN)/ruff format --check .

@@ -88,6 +88,16 @@ KERNELS: dict[str, tuple[str, str, str]] = {
         f"Tuple((i8, i8, i8[::1], {_F8_2}))(i8[::1], {_F8_2}, i8[::1], b1[::1], i8[::1], b1[::1], i8[::1], {_F8_2}, "
         f"{_F8_2}, b1[::1])",
     ),
+    "travel_distance": (
+        "ekfslam_gym.envs.clearance_kernels",
+        "travel_distance",
+        f"f8({_F8_1}, {_F8_1}, b1[::1], f8, f8)",
+    ),
+    "scan_clearances": (
+        "ekfslam_gym.envs.clearance_kernels",
+        "scan_clearances",
+        f"UniTuple(f8, 3)({_F8_1}, {_F8_1}, {_F8_1}, f8, f8, f8, b1)",
+    ),
     "mark_coverage": (
         "ekfslam_gym.envs.kernels",
         "mark_coverage",
@@ -139,6 +149,7 @@ SOURCES: tuple[str, ...] = (
     "sim/odometry_kernels.py",
     "sim/measurement_kernels.py",
     "envs/kernels.py",
+    "envs/clearance_kernels.py",
     "envs/observation_codes.py",
     "envs/association_truth.py",
 )

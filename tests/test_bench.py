@@ -9,6 +9,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 EXPECTED = {
+    "actions.py": "/ velocity",
     "association.py": "jcbc / known",
     "belief_image.py": "dict + belief_image",
     "consistency.py": "median ANEES",

@@ -78,6 +78,26 @@ def test_travel_distance_in_contact_blocks_only_walls_in_front():
     # end points too far apart are not joined: the disc passes between them
     assert math.isinf(travel_distance([2.0, 2.0], [-1.0, 1.0], [True, True], rho, 1.5))
     assert travel_distance([2.0, 2.0], [-1.0, 1.0], [True, True], rho, 2.5) == pytest.approx(1.75)
+    with pytest.raises(ValueError, match="one entry per beam"):
+        travel_distance([2.0, 2.0], [0.0], [True, True], rho, 1.5)
+
+
+def test_the_compiled_clearances_equal_travel_distance_over_the_scans_end_points():
+    """``clearances`` (one compiled call over the scan) against ``travel_distance`` on the end points it implies,
+    ahead and mirrored behind, including beams that saw nothing and scans in contact."""
+    c = _controller()
+    angles = 2.0 * np.pi * np.arange(16) / 16
+    rng = np.random.default_rng(2)
+    for _ in range(300):
+        ranges = rng.uniform(0.1, SCAN_MAX, 16)
+        ranges[rng.random(16) < 0.3] = SCAN_MAX
+        xs, ys, hit = ranges * np.cos(angles), ranges * np.sin(angles), ranges < SCAN_MAX - 1e-6
+        expected = (
+            travel_distance(xs, ys, hit, c._rho, c.join),
+            travel_distance(-xs, ys, hit, c._rho, c.join),
+        )
+        assert c.clearances(ranges) == pytest.approx(expected, abs=1e-12)
+        assert c.clearance_ahead(ranges) == pytest.approx(expected[0], abs=1e-12)
 
 
 def test_control_law_in_free_space():

@@ -27,6 +27,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .. import compiled
+
 INF = math.inf
 
 
@@ -59,80 +61,22 @@ def _wrap(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def _point_travel(x: float, y: float, rho: float) -> float:
-    """How far a disc of radius ``rho`` at the origin moves along +x before touching the point (x, y): inf if it
-    passes by or the point is behind, 0 if the disc already overlaps a point in front of its centre."""
-    if abs(y) >= rho:
-        return INF
-    s = x - math.sqrt(rho * rho - y * y)
-    if s >= 0.0:
-        return s
-    return 0.0 if x > 0.0 else INF
-
-
-def _segment_travel(ax: float, ay: float, bx: float, by: float, rho: float) -> float:
-    """How far a disc of radius ``rho`` at the origin moves along +x before touching the *inside* of segment
-    AB (its end points are points of their own, see ``_point_travel``): the ray against the capsule's two
-    sides. Overlapping already: 0 if the nearest point of the segment lies in front of the centre, else inf
-    (moving on takes the disc away)."""
-    dx, dy = bx - ax, by - ay
-    length2 = dx * dx + dy * dy
-    if length2 <= 0.0:
-        return INF
-    t = min(max(-(ax * dx + ay * dy) / length2, 0.0), 1.0)
-    cx, cy = ax + t * dx, ay + t * dy
-    if cx * cx + cy * cy < rho * rho:
-        return 0.0 if cx > 0.0 else INF
-    length = math.sqrt(length2)
-    nx, ny = -dy / length * rho, dx / length * rho
-    best = INF
-    for sign in (1.0, -1.0):
-        py, qy = ay + sign * ny, by + sign * ny
-        if (py > 0.0) == (qy > 0.0):
-            continue  # this side does not cross the line of travel
-        px, qx = ax + sign * nx, bx + sign * nx
-        s = px + py / (py - qy) * (qx - px)
-        if 0.0 <= s < best:
-            best = s
-    return best
-
-
-def travel_distance(xs: list[float], ys: list[float], hit: list[bool], rho: float, join: float) -> float:
+def travel_distance(xs: Any, ys: Any, hit: Any, rho: float, join: float) -> float:
     """How far (m) a disc of radius ``rho`` at the origin can move along +x before it touches a wall.
 
     ``xs``, ``ys``: the scan's end points in a frame whose x axis is the direction of travel, beam by beam
     around the circle; ``hit``: which beams ended on a wall. The walls are the hit end points and the segments
     joining neighbouring hit end points less than ``join`` m apart. 0 when a wall in front already overlaps
-    the disc; inf when nothing lies in the way.
+    the disc; inf when nothing lies in the way. (The compiled ``clearance_kernels.travel_distance``.)
     """
-    n = len(xs)
-    best = INF
-    rho2 = rho * rho
-    join2 = join * join
-    for i in range(n):
-        if not hit[i]:
-            continue
-        x, y = xs[i], ys[i]
-        if x > -rho and abs(y) < rho:
-            s = _point_travel(x, y, rho)
-            if s < best:
-                best = s
-        k = i + 1 if i + 1 < n else 0
-        if k == i or not hit[k]:
-            continue
-        bx, by = xs[k], ys[k]
-        if (x - bx) ** 2 + (y - by) ** 2 >= join2:
-            continue
-        if (
-            (y >= rho and by >= rho)
-            or (y <= -rho and by <= -rho)
-            or (x < 0.0 and bx < 0.0 and x * x + y * y >= rho2 and bx * bx + by * by >= rho2)
-        ):
-            continue  # wholly to one side of the swept band, or behind and clear
-        s = _segment_travel(x, y, bx, by, rho)
-        if s < best:
-            best = s
-    return best
+    xs = np.ascontiguousarray(xs, dtype=np.float64).reshape(-1)
+    ys = np.ascontiguousarray(ys, dtype=np.float64).reshape(-1)
+    hit = np.ascontiguousarray(hit, dtype=np.bool_).reshape(-1)
+    if not xs.shape == ys.shape == hit.shape:
+        raise ValueError(
+            f"xs, ys and hit must have one entry per beam, got {xs.shape}, {ys.shape}, {hit.shape}"
+        )
+    return float(compiled.travel_distance(xs, ys, hit, float(rho), float(join)))
 
 
 class WaypointController:
@@ -204,8 +148,9 @@ class WaypointController:
         self.join = float(join)
         self.min_speed = float(min_speed)
         angles = [2.0 * math.pi * i / n_beams for i in range(n_beams)]
-        self._cos = [math.cos(a) for a in angles]
-        self._sin = [math.sin(a) for a in angles]
+        self._beam_cos = np.array([math.cos(a) for a in angles])
+        self._beam_sin = np.array([math.sin(a) for a in angles])
+        self._sin = self._beam_sin.tolist()
         self._rho = self.radius + self.margin
 
     @classmethod
@@ -230,26 +175,16 @@ class WaypointController:
 
     def clearance_ahead(self, scan: Any) -> float:
         """``clearances(scan)[0]`` alone (half the work): the room ahead, for the primitives' guard."""
-        ranges, hit, xs, ys = self._endpoints(scan)
-        return travel_distance(xs, ys, hit, self._rho, self.join)
+        return self._clearances(scan, False)[0]
 
-    def _endpoints(self, scan: Any) -> tuple[list[float], list[bool], list[float], list[float]]:
-        """The scan's ranges, which beams hit a wall, and their end points in the robot's frame."""
-        ranges = scan.tolist() if hasattr(scan, "tolist") else list(scan)
-        if len(ranges) != self.n_beams:
-            raise ValueError(f"scan must have {self.n_beams} beams, got {len(ranges)}")
+    def _clearances(self, scan: Any, behind_too: bool = True) -> tuple[float, float, float]:
+        """(room ahead, room behind, nearest hit range), m: ``clearance_kernels.scan_clearances``."""
+        ranges = np.ascontiguousarray(scan, dtype=np.float64)
+        if ranges.shape != (self.n_beams,):
+            raise ValueError(f"scan must have {self.n_beams} beams, got shape {ranges.shape}")
         limit = self.scan_max_range - 1e-6
-        hit = [r < limit for r in ranges]
-        xs = [r * c for r, c in zip(ranges, self._cos)]
-        ys = [r * s for r, s in zip(ranges, self._sin)]
-        return ranges, hit, xs, ys
-
-    def _clearances(self, scan: Any) -> tuple[float, float, float]:
-        ranges, hit, xs, ys = self._endpoints(scan)
-        ahead = travel_distance(xs, ys, hit, self._rho, self.join)
-        behind = travel_distance([-x for x in xs], ys, hit, self._rho, self.join)
-        nearest = min((r for r, h in zip(ranges, hit) if h), default=INF)
-        return ahead, behind, nearest
+        cos, sin = self._beam_cos, self._beam_sin
+        return compiled.scan_clearances(ranges, cos, sin, limit, self._rho, self.join, behind_too)
 
     def command(self, pose: Any, goal: Any, scan: Any) -> Command:
         """The action towards ``goal`` (x, y in the world, m) from the pose estimate ``pose`` (x, y, theta)
