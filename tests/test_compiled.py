@@ -1,7 +1,9 @@
 """The compiled kernels: ahead-of-time and JIT give the same env, a stale extension is refused, and the
 layouts' flood fill agrees with scipy's connected components."""
 
+import fnmatch
 import os
+import re
 import subprocess
 import sys
 import warnings
@@ -68,3 +70,18 @@ def test_connected_component_matches_scipy_label(seed):
     labels, _ = ndimage.label(free)  # default structure: 4-connectivity, as the flood fill
     expected = labels == labels[row, col]
     np.testing.assert_array_equal(compiled.connected_component(free, int(row), int(col)), expected)
+
+
+def test_the_makefile_rebuilds_the_extension_when_any_kernel_source_changes():
+    """Every file the extension's digest covers (``compiled.SOURCES``) is among the Makefile's
+    ``KERNEL_SOURCES``, so ``make install`` rebuilds it rather than leave a stale build to be refused."""
+    with open(os.path.join(REPO, "Makefile"), encoding="utf-8") as file:
+        makefile = file.read()
+    listed = re.search(r"^KERNEL_SOURCES := (.*?)(?<!\\)$", makefile, re.M | re.S).group(1)
+    patterns = re.findall(r"ekfslam_gym/[\w/*.]+\.py", listed)
+    missing = [
+        source
+        for source in compiled.SOURCES
+        if not any(fnmatch.fnmatch(f"ekfslam_gym/{source}", pattern) for pattern in patterns)
+    ]
+    assert patterns and not missing, f"add to the Makefile's KERNEL_SOURCES: {missing}"
