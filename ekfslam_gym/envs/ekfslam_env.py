@@ -18,7 +18,7 @@ from ..sim.world import World
 from .actions import clipped_velocity, make_interface
 from .config import EnvConfig
 from .observation import ObservationLayout, make_memory, observation_constants, observation_space
-from .rewards import QUALITY_STD, REWARD_TERMS
+from .rewards import REWARD_TERMS
 
 ODOMETERS = {"odometry": "odometry", "wheels": "wheel_odometry", "velocity": "velocity_odometry"}
 
@@ -93,10 +93,7 @@ class EKFSLAMEnv(gym.Env):
     ``map_accuracy`` (w times the drop of ln R, R = sqrt(mean_j tr Sigma_jj) over the landmarks seen, the
     landmark RMSE a consistent filter expects; the terms sum to w ln(R_first / R_final) from the first step
     with a landmark seen, so a discovery placed less certainly than the map so far costs and a loop closure
-    pays: beside ``info_gain``, which pays for certainty, it weighs the map's accuracy),
-    ``map_quality`` (w times the rise of Q = sum_j ln(1 + s^4 / det Sigma_jj) over the landmarks seen, s =
-    ``rewards.QUALITY_STD``: each landmark counts by how well it is placed, so a discovery from a drifted pose
-    earns little and repairing it earns).
+    pays: beside ``info_gain``, which pays for certainty, it weighs the map's accuracy).
 
     Standing still earns little: every prediction adds odometry noise (the noise floor), a negative term, and
     re-observing the same landmarks pays ever less (the information about them grows like ln t). Because the
@@ -323,7 +320,6 @@ class EKFSLAMEnv(gym.Env):
             self._mark_walls()
         nees, rmse, _, self._worst_variance, seen, _, _ = self._step_metrics(read)
         self._log_map_rms = self._log_map_rms_std() if weights.map_accuracy else math.nan
-        self._map_quality = self._placed_nats() if weights.map_quality else 0.0
         info = self._info({"info_gain": 0.0}, nees, rmse, seen, 0.0, 0.0)
         if self.render_mode == "human":
             self.render()
@@ -539,23 +535,6 @@ class EKFSLAMEnv(gym.Env):
         if not seen.any():
             return math.nan
         return 0.5 * math.log(float(self._traces[seen].mean()))
-
-    def _reward_map_quality(self, weight: float) -> float:
-        previous, self._map_quality = self._map_quality, self._placed_nats()
-        return weight * (self._map_quality - previous)
-
-    def _placed_nats(self) -> float:
-        """Q = sum_j ln(1 + s^4 / det Sigma_jj) over the landmarks (slots) seen, s = ``rewards.QUALITY_STD``:
-        the marginal information of each landmark's position against a prior of std s, so a landmark placed
-        far worse than s counts for almost nothing."""
-        seen = self._slot_valid if self._unknown else self._belief[2]
-        if not seen.any():
-            return 0.0
-        cov = self._belief[1]
-        diagonal = np.diagonal(cov)[3:]
-        off = np.diagonal(cov, offset=1)[3::2]
-        det = (diagonal[0::2] * diagonal[1::2] - off * off)[seen]
-        return float(np.log1p(QUALITY_STD**4 / det).sum())
 
     def _reward_coverage(self, weight: float) -> float:
         return weight * self._newly_covered * self.config.observation.memory_resolution**2

@@ -58,14 +58,6 @@ REWARD_TERMS: tuple[RewardTerm, ...] = (
         "accuracy against its certainty; 0 by default",
     ),
     RewardTerm(
-        "map_quality",
-        0.0,
-        "weight per nat of Q = sum_j ln(1 + s^4 / det Sigma_jj) over the landmarks seen, s = QUALITY_STD "
-        "(0.25 m): a landmark's worth grows with how well it is placed (read from a localised pose, about "
-        "0.08 m, it is worth 4.6 nats; from a pose 0.3 m off, 0.4), so discoveries from a drifted pose earn "
-        "little and repairing them earns; telescopes to w (Q_final - Q_first); 0 by default",
-    ),
-    RewardTerm(
         "coverage",
         0.0,
         "bonus per m^2 of the world the sensor looks at for the first time (the coverage memory), an "
@@ -73,8 +65,5 @@ REWARD_TERMS: tuple[RewardTerm, ...] = (
         "the collision penalty",
     ),
 )
-
-QUALITY_STD = 0.25
-"""m, the landmark position std at which ``map_quality`` counts a landmark half placed (ln 2 nats)."""
 
 REWARD_NAMES: tuple[str, ...] = tuple(term.name for term in REWARD_TERMS)
