@@ -29,8 +29,6 @@ import numpy as np
 
 from .. import compiled
 
-INF = math.inf
-
 
 class Command(NamedTuple):
     """One control step: the normalised action and the controller's verdict on the goal.
