@@ -223,10 +223,7 @@ class FrontierAgent(Agent):
             a frontier lies from where the episode started (0: the nearest frontier; above 0 the map grows
             outwards from the start, so the robot keeps the landmarks it mapped first in reach and its pose
             stays localised at less coverage lost than relocalising costs; a teacher's setting, see
-            docs/results.md). return_home: with it set, once the episode's time left is at most this multiple
-            of the drive (by path, at full speed) to the most certain seen landmark, the agent stops exploring
-            and revisits the most certain landmarks to the end, so the episode's last updates close one loop
-            through the landmarks it mapped first (None: never).
+            docs/results.md).
 
     The defaults are the best of one-at-a-time sweeps on training seeds 0-39 of EKFSLAM-v0 and
     EKFSLAM-Loop-v0 (mean final map log det): turn_cost 0-4 m/rad (0, pure path distance, turns back and forth
@@ -260,15 +257,11 @@ class FrontierAgent(Agent):
         relocalize_until: float = 0.6,
         anchor_ratio: float = 0.7,
         home_weight: float = 0.0,
-        return_home: float | None = None,
     ) -> None:
         super().__init__()
         if not home_weight >= 0:
             raise ValueError(f"need home_weight >= 0, got {home_weight}")
-        if return_home is not None and not return_home > 0:
-            raise ValueError(f"need return_home > 0 (or None), got {return_home}")
         self.home_weight = float(home_weight)
-        self.return_home = None if return_home is None else float(return_home)
         if min_region < 1 or replan_every < 1 or stuck_steps < 1 or lookahead <= 0 or patience <= 0:
             raise ValueError(
                 "need min_region, replan_every, stuck_steps >= 1 and lookahead, patience > 0, got "
@@ -330,8 +323,6 @@ class FrontierAgent(Agent):
         self._stalled = 0
         self.mode = "explore"
         self._relocalizing = False
-        self._returning = False
-        self._last_step = int(cfg.max_episode_steps) * int(cfg.action.steps)  # control steps in an episode
 
     # ------------------------------------------------------------------ geometry
     def _cell_of(self, x: float, y: float) -> tuple[int, int]:
@@ -383,12 +374,6 @@ class FrontierAgent(Agent):
         sources = path_sources(self._wall, self._bounds, self._cell, pose, scan, self._angles)
         dist, parent = grid_paths(self._wall, sources, self._cell)
         self._since_plan = 0
-        if self._returning or self._time_to_return(dist):
-            self._returning = True
-            self._goal = None
-            if self._plan_return(pose, dist, parent):
-                self._index = 0
-                return
         if self._relocalize_switch():
             self._relocalizing = not self._relocalizing
             self._landmark = -1
@@ -427,38 +412,6 @@ class FrontierAgent(Agent):
             self._goal = None
             self._plan_revisit(pose, dist, parent)
         self._index = 0
-
-    def _most_certain(self) -> int:
-        """The seen landmark with the smallest marginal covariance trace, -1 when none is seen."""
-        ekf = self.env.filter
-        observed = np.asarray(ekf.observed)
-        if not observed.any():
-            return -1
-        covs = ekf.landmark_covs()
-        trace = np.where(observed, covs[:, 0, 0] + covs[:, 1, 1], np.inf)
-        return int(np.argmin(trace))
-
-    def _time_to_return(self, dist: np.ndarray) -> bool:
-        """Whether the time left is down to ``return_home`` times the drive to the most certain landmark."""
-        if self.return_home is None:
-            return False
-        anchor = self._most_certain()
-        if anchor < 0:
-            return False
-        drive = dist[self._cell_of(*np.asarray(self.env.filter.landmarks)[anchor])]
-        return (
-            bool(np.isfinite(drive))
-            and self._last_step - self._t <= self.return_home * drive / self._step_time
-        )
-
-    def _plan_return(self, pose: np.ndarray, dist: np.ndarray, parent: np.ndarray) -> bool:
-        """The episode's end is near: drive to the most certain seen landmarks, one after another."""
-        self.mode = "return"
-
-        def score(covs: np.ndarray, path: np.ndarray) -> np.ndarray:
-            return -(covs[:, 0, 0] + covs[:, 1, 1])
-
-        return self._drive_to_landmark(pose, dist, parent, score)
 
     def _plan_revisit(self, pose: np.ndarray, dist: np.ndarray, parent: np.ndarray) -> None:
         """No frontier left: drive to the seen landmark out of view the longest (or the most uncertain)."""
