@@ -19,6 +19,7 @@ from agents.frontier import (
     frontier_cells,
     frontier_regions,
     grid_paths,
+    nearest_paths,
     path_sources,
 )
 from agents.greedy.grid import update_walls
@@ -93,6 +94,39 @@ def test_grid_paths_from_several_sources_take_the_cheapest():
     dist, parent = grid_paths(np.zeros((1, 6), dtype=bool), start, 0.5)
     assert dist[0] == pytest.approx([0.0, 0.5, 1.0, 1.2, 0.7, 0.2])
     assert parent[3] == 4 and parent[2] == 1 and parent[0] == parent[5] == -1
+
+
+def test_the_bounded_search_finds_the_full_searchs_cheapest_targets_bit_for_bit():
+    """``nearest_paths`` stops once no cell left can beat the cheapest target by ``margin``: on random walled
+    grids, every cell it reaches has ``grid_paths``' exact distance and parent, the cells beyond are inf, the
+    cheapest target and every target within the margin of it are reached, and it searches less of the grid
+    (with no target the search is the full one)."""
+    rng = np.random.default_rng(7)
+    smaller = 0
+    for _ in range(40):
+        shape = (int(rng.integers(5, 40)), int(rng.integers(5, 40)))
+        blocked = rng.random(shape) < 0.25
+        start = np.full(shape, np.inf)
+        start[int(rng.integers(shape[0])), int(rng.integers(shape[1]))] = float(rng.random())
+        extra = np.where(rng.random(shape) < 0.03, 3.0 * rng.random(shape), np.inf)
+        margin = float(rng.choice([0.0, 0.5, 1.5]))
+        full, full_parent = grid_paths(blocked, start, 0.5)
+        dist, parent = nearest_paths(blocked, start, 0.5, extra, margin)
+        reached = np.isfinite(dist)
+        assert np.array_equal(dist[reached], full[reached])  # exact, not approximately
+        assert np.array_equal(parent[reached.ravel()], full_parent[reached.ravel()])
+        assert np.all(parent[~reached.ravel()] == -1)
+        cost = full + extra
+        if np.isfinite(cost).any():
+            assert np.all(reached[cost <= cost.min() + margin])
+            assert (dist + extra).min() == cost.min()
+            smaller += reached.sum() < np.isfinite(full).sum()
+        else:
+            assert np.array_equal(reached, np.isfinite(full))
+    assert smaller > 10
+    none = np.full((6, 6), np.inf)
+    dist, _ = nearest_paths(np.zeros((6, 6), dtype=bool), _source((6, 6), 0, 0), 0.5, none, 1.0)
+    assert np.array_equal(dist, grid_paths(np.zeros((6, 6), dtype=bool), _source((6, 6), 0, 0), 0.5)[0])
 
 
 def test_paths_start_on_the_robots_side_of_a_wall_in_its_own_cell():
