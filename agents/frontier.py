@@ -8,8 +8,8 @@ must first turn to face it (with a field of view of half a circle, the frontier 
 in metres but not in time). The path is a shortest path (Dijkstra, 8-connected) over the memory grid around
 the walls the agent has mapped, searched only as far as the cheapest frontier and those within
 ``switch_margin`` of it need (``nearest_paths``: the same paths, bit for bit, at about half the cost of a
-search of the whole grid on EKFSLAM-Large-v0); the waypoint controller (``ekfslam_gym.envs.waypoint``) steers at the
-furthest point of it within ``lookahead`` m that no mapped wall hides. The agent plans again when the goal
+search of the whole grid on EKFSLAM-Large-v0); the waypoint controller (``ekfslam_gym.envs.waypoint``)
+steers at the furthest point of it within ``lookahead`` m that no mapped wall hides. The agent plans again when the goal
 has been looked at, every ``replan_every`` steps (keeping its goal unless another is ``switch_margin`` m
 nearer), or when it gives up on the goal.
 
@@ -438,7 +438,7 @@ class FrontierAgent(Agent):
                     self.patience * (dist[goal] + self._cell) / self._step_time + 2 * self.stuck_steps
                 )
             self._path = self._path_to(parent, *goal)
-        else:  # no frontier reachable: the search above was the full one
+        else:  # no frontier reachable, or nothing left to discover: the search above was the full one
             self._goal = None
             self._plan_revisit(pose, dist, parent)
         self._index = 0
