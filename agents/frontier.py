@@ -9,9 +9,9 @@ in metres but not in time). The path is a shortest path (Dijkstra, 8-connected) 
 the walls the agent has mapped, searched only as far as the cheapest frontier and those within
 ``switch_margin`` of it need (``nearest_paths``: the same paths, bit for bit, at about half the cost of a
 search of the whole grid on EKFSLAM-Large-v0); the waypoint controller (``ekfslam_gym.envs.waypoint``)
-steers at the furthest point of it within ``lookahead`` m that no mapped wall hides. The agent plans again when the goal
-has been looked at, every ``replan_every`` steps (keeping its goal unless another is ``switch_margin`` m
-nearer), or when it gives up on the goal.
+steers at the furthest point of it within ``lookahead`` m that no mapped wall hides. The agent plans again
+when the goal has been looked at, every ``replan_every`` steps (keeping its goal unless another is
+``switch_margin`` m nearer), or when it gives up on the goal.
 
 Walls: the coverage memory ignores walls (it records where the sensor pointed), but the loop's central block
 and the rooms' walls must be gone around, so the agent keeps an occupancy-style wall memory on the same grid
