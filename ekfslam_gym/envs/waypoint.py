@@ -201,13 +201,14 @@ class WaypointController:
         if v <= 0.0:
             return Command(0.0, omega, False, False)  # turning in place is always safe: the robot is a disc
 
-        ahead, behind, nearest = self._clearances(scan)
+        ahead = self.clearance_ahead(scan)  # the room behind is needed only when blocked, below
         room = ahead - self.clearance
         cap = max(0.0, room) / self.braking
         if cap >= min(v, self.min_speed):
             return Command(min(v, cap), omega, False, False)
         # Blocked with the goal ahead: back off if a wall already overlaps the inflated robot in front, and
         # turn in place away from the wall (towards the side with more room) so the robot can get round it.
+        _, behind, nearest = self._clearances(scan)
         if ahead <= 0.0 and nearest < self._rho and behind > self.clearance:
             v = -self.backoff * min(1.0, (behind - self.clearance) / self.braking)
         else:
