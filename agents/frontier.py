@@ -411,23 +411,33 @@ class FrontierAgent(Agent):
             self._relocalizing = False  # no landmark certain enough to help: explore on
         frontier = self.frontiers()
         every_landmark_seen = bool(np.all(np.asarray(self.env.filter.observed)))
-        if frontier.any() and not every_landmark_seen:
+        rows, cols = np.nonzero(frontier)
+        exploring = rows.size > 0 and not every_landmark_seen
+        if exploring:
             # only the frontier cells within switch_margin of the cheapest matter below: search no further
-            rows, cols = np.nonzero(frontier)
+            turn, home = self._goal_terms(pose, rows, cols)
             extra = np.full(frontier.shape, np.inf)
-            extra[rows, cols] = self._goal_cost(pose, rows, cols, 0.0)
+            extra[rows, cols] = turn if home is None else turn + home
             dist, parent = nearest_paths(self._wall, sources, self._cell, extra, self.switch_margin)
+            reached = np.isfinite(dist[rows, cols])
+            exploring = bool(reached.any())
         else:
             dist, parent = grid_paths(self._wall, sources, self._cell)
-        candidates = frontier & np.isfinite(dist)
-        if candidates.any() and not every_landmark_seen:
+        if exploring:
             self.mode = "explore"
             self._landmark = -1
-            rows, cols = np.nonzero(candidates)
-            cost = self._goal_cost(pose, rows, cols, dist[rows, cols])
+            rows, cols = rows[reached], cols[reached]
+            cost = dist[rows, cols] + turn[reached]
+            if home is not None:
+                cost = cost + home[reached]
             best = int(np.argmin(cost))
             goal = (int(rows[best]), int(cols[best]))
-            if self._goal is not None and self._goal != goal and candidates[self._goal]:
+            if (
+                self._goal is not None
+                and self._goal != goal
+                and frontier[self._goal]
+                and np.isfinite(dist[self._goal])
+            ):
                 current = np.flatnonzero((rows == self._goal[0]) & (cols == self._goal[1]))[0]
                 if cost[current] <= cost[best] + self.switch_margin:
                     goal = self._goal  # keep the goal unless another is clearly nearer
@@ -443,16 +453,17 @@ class FrontierAgent(Agent):
             self._plan_revisit(pose, dist, parent)
         self._index = 0
 
-    def _goal_cost(self, pose: np.ndarray, rows: np.ndarray, cols: np.ndarray, path: Any) -> np.ndarray:
-        """The cost (m) of the frontier cells (rows, cols) at ``path`` m of path: plus ``turn_cost`` m per radian
-        of turning to face them, plus ``home_weight`` m per m they lie from the start."""
+    def _goal_terms(self, pose: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, Any]:
+        """What the frontier cells (rows, cols) cost on top of their path (m): ``turn_cost`` m per radian of
+        turning to face them, and ``home_weight`` m per m they lie from the start (None without it); a cell's
+        cost is its path plus the first, plus the second."""
         xs = self._bounds[0] + (cols + 0.5) * self._cell
         ys = self._bounds[1] + (rows + 0.5) * self._cell
         turn = np.abs((np.arctan2(ys - pose[1], xs - pose[0]) - pose[2] + np.pi) % (2 * np.pi) - np.pi)
-        cost = path + self.turn_cost * turn
-        if self.home_weight:
-            cost = cost + self.home_weight * np.hypot(xs - self._home[0], ys - self._home[1])
-        return cost
+        home = (
+            self.home_weight * np.hypot(xs - self._home[0], ys - self._home[1]) if self.home_weight else None
+        )
+        return self.turn_cost * turn, home
 
     def _plan_revisit(self, pose: np.ndarray, dist: np.ndarray, parent: np.ndarray) -> None:
         """No frontier left: drive to the seen landmark out of view the longest (or the most uncertain)."""
