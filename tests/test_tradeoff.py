@@ -122,3 +122,17 @@ def test_the_command_refuses_files_it_cannot_read_as_points(tmp_path, capsys):
         with pytest.raises(SystemExit):
             main([str(tmp_path / path)])
         assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["heldout", "evaluation"])
+def test_the_documented_large_figures_redraw_from_their_csvs(tmp_path, capsys, name):
+    """docs/results.md gives these commands; the groups they name must be in the committed points."""
+    from pathlib import Path
+
+    csv_path = Path(__file__).resolve().parents[1] / "docs" / f"tradeoff_EKFSLAM-Large-v0_{name}.csv"
+    args = [str(csv_path), "--ci", "shipped policy", "--ci", "baselines", "--annotate", "baselines"]
+    assert main(args + ["--plot", str(tmp_path / "figure.png")]) == 0
+    _, _, points = read_csv(csv_path)
+    assert [p.name for p in points if p.group == "shipped policy"] != []
+    assert {p.name for p in points if p.group == "baselines"} == {"greedy", "frontier", "lawnmower"}
+    assert "shipped policy" in capsys.readouterr().out  # the shipped policy is on the front

@@ -187,5 +187,5 @@ def tradeoff_figure(
     ax.set_ylabel(_label(y))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="best")
-    ax.set_title(title or "IQM over each model's episodes", fontsize=9)
+    ax.set_title(title or "IQM over each model's episodes", fontsize=9, wrap=True)
     return figure
