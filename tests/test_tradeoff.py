@@ -136,3 +136,14 @@ def test_the_documented_large_figures_redraw_from_their_csvs(tmp_path, capsys, n
     assert [p.name for p in points if p.group == "shipped policy"] != []
     assert {p.name for p in points if p.group == "baselines"} == {"greedy", "frontier", "lawnmower"}
     assert "shipped policy" in capsys.readouterr().out  # the shipped policy is on the front
+
+
+def test_a_metric_with_no_better_side_is_plotted_without_a_front(tmp_path, capsys):
+    rng = np.random.default_rng(4)
+    episodes = _episodes(rng, 8)
+    for e in episodes:
+        e["anees"] = float(rng.gamma(3, 1))
+    (tmp_path / "a.json").write_text(json.dumps({"a": episodes}))
+    assert main([str(tmp_path / "a.json"), "--y", "anees", "--plot", str(tmp_path / "a.png")]) == 0
+    assert "no Pareto front" in capsys.readouterr().out
+    assert (tmp_path / "a.png").is_file()

@@ -58,8 +58,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--label", action="append", default=[], help="a group's name, one per JSON file, in order"
     )
-    parser.add_argument("--x", default="map_log_det", choices=metric_names, metavar="METRIC")
-    parser.add_argument("--y", default="landmark_rmse", choices=metric_names, metavar="METRIC")
+    metric_help = "a metric of the episodes, one of " + ", ".join(metric_names) + " (default %(default)s)"
+    parser.add_argument(
+        "--x", default="map_log_det", choices=metric_names, metavar="METRIC", help=metric_help
+    )
+    parser.add_argument(
+        "--y", default="landmark_rmse", choices=metric_names, metavar="METRIC", help=metric_help
+    )
     parser.add_argument("--plot", type=Path, metavar="FILE.png")
     parser.add_argument("--csv", type=Path, metavar="FILE.csv", help="write the points, to redraw them later")
     parser.add_argument("--ci", action="append", default=[], metavar="GROUP", help="draw this group's CIs")
