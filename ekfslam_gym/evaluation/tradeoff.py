@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import metrics
+from .aggregate import aggregate
 from .report import BETTER
 
 if TYPE_CHECKING:
@@ -43,11 +43,6 @@ class Point:
     y_hi: float
 
 
-def _iqm_and_ci(values: np.ndarray) -> tuple[float, float, float]:
-    values = values[np.isfinite(values)]
-    return (metrics.iqm(values), *metrics.bootstrap_ci(values))
-
-
 def points_from_episodes(
     episodes: Mapping[str, Sequence[Mapping[str, float]]], x: str, y: str, group: str
 ) -> list[Point]:
@@ -61,9 +56,10 @@ def points_from_episodes(
             missing = [i for i, e in enumerate(eps) if key not in e]
             if missing:
                 raise ValueError(f"{group}: episode {missing[0]} of {name!r} has no {key!r}")
-        xs = np.array([e[x] for e in eps], dtype=float)
-        ys = np.array([e[y] for e in eps], dtype=float)
-        points.append(Point(group, name, len(eps), *_iqm_and_ci(xs), *_iqm_and_ci(ys)))
+        table = aggregate(eps, (x, y))
+        points.append(
+            Point(group, name, len(eps), table[x]["iqm"], *table[x]["ci"], table[y]["iqm"], *table[y]["ci"])
+        )
     return points
 
 
