@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from ekfslam_gym.cli.tradeoff import main
 from ekfslam_gym.evaluation.aggregate import aggregate
+from ekfslam_gym.evaluation.report import json_safe
 from ekfslam_gym.evaluation.tradeoff import Point, pareto_front, points_from_episodes, read_csv, write_csv
 
 
@@ -18,18 +20,19 @@ def _dominates(q: Point, p: Point, sx: float, sy: float) -> bool:
     return at_least and (sx * q.x < sx * p.x or sy * q.y < sy * p.y)
 
 
+@pytest.mark.parametrize("x, sx", [("map_log_det", 1.0), ("loop_closures", -1.0)])
 @pytest.mark.parametrize("y, sy", [("landmark_rmse", 1.0), ("seen_fraction", -1.0)])
-def test_the_front_is_every_point_that_no_other_point_dominates(y, sy):
+def test_the_front_is_every_point_that_no_other_point_dominates(x, sx, y, sy):
     rng = np.random.default_rng(3)
     for trial in range(30):
         n = int(rng.integers(1, 40))
         # few distinct values, so ties on one metric and repeated points are common
         xs, ys = rng.integers(0, 8, n).astype(float), rng.integers(0, 8, n).astype(float)
         points = [Point("g", f"m{i}", 10, xs[i], 0, 0, ys[i], 0, 0) for i in range(n)]
-        expected = {p.name for p in points if not any(_dominates(q, p, 1.0, sy) for q in points)}
-        front = pareto_front(points, "map_log_det", y)
+        expected = {p.name for p in points if not any(_dominates(q, p, sx, sy) for q in points)}
+        front = pareto_front(points, x, y)
         assert {p.name for p in front} == expected, trial
-        assert [p.x for p in front] == sorted(p.x for p in front)
+        assert [sx * p.x for p in front] == sorted(sx * p.x for p in front)  # from x's best end
 
 
 def test_the_front_leaves_out_undefined_points_and_refuses_a_metric_with_no_better_side():
@@ -66,7 +69,17 @@ def test_points_are_aggregated_as_the_evaluation_tables_are():
 
 def test_the_csv_gives_back_the_points_it_was_written_from(tmp_path):
     points = [
-        Point("PPO, seeds 0-4", 'run "a", best', 70, -250.38123456789, -297.0, -196.5, 0.1041, 0.085, 0.132),
+        Point(
+            "PPO, seeds 0-4",
+            'run "a", best',
+            70,
+            np.float64(-250.38123456789),
+            -297.0,
+            -196.5,
+            0.1041,
+            0.085,
+            0.132,
+        ),
         Point("planners", "frontier", 70, 1e-300, -1.0, 2.0, math.nan, math.nan, math.nan),
     ]
     path = write_csv(points, tmp_path / "sub" / "points.csv", "map_log_det", "landmark_rmse")
@@ -124,20 +137,29 @@ def test_the_command_refuses_files_it_cannot_read_as_points(tmp_path, capsys):
         assert message in capsys.readouterr().err
 
 
-@pytest.mark.parametrize(
-    "name",
-    ["Large-v0_heldout", "Large-v0_evaluation", "v0_heldout", "Loop-v0_heldout"],
-)
-def test_the_documented_figures_redraw_from_their_csvs(tmp_path, capsys, name):
-    """docs/results.md gives these commands; the groups they name must be in the committed points."""
-    from pathlib import Path
+# docs/results.md's reference lines: (baseline, field, value as written), each a baseline's IQM or CI end
+DOCUMENTED_LINES = {
+    "Large-v0_heldout": [("frontier", "x_lo", -224.1), ("greedy", "y_lo", 0.1177)],
+    "Large-v0_evaluation": [("frontier", "x_lo", -246.5), ("greedy", "y_lo", 0.1088)],
+    "v0_heldout": [("greedy", "x", -558.9), ("lawnmower", "x_lo", -547.7), ("greedy", "y", 0.0513)],
+    "Loop-v0_heldout": [("frontier", "x_lo", -584.0), ("greedy", "y_lo", 0.0930)],
+}
 
+
+@pytest.mark.parametrize("name", sorted(DOCUMENTED_LINES))
+def test_the_documented_figures_redraw_from_their_csvs_with_their_baselines_lines(tmp_path, capsys, name):
+    """docs/results.md redraws each figure from its committed points, with lines at the baselines' figures."""
     csv_path = Path(__file__).resolve().parents[1] / "docs" / f"tradeoff_EKFSLAM-{name}.csv"
     args = [str(csv_path), "--ci", "shipped policy", "--ci", "baselines", "--annotate", "baselines"]
     assert main(args + ["--plot", str(tmp_path / "figure.png")]) == 0
     _, _, points = read_csv(csv_path)
-    assert [p.name for p in points if p.group == "shipped policy"] != []
-    assert {p.name for p in points if p.group == "baselines"} == {"greedy", "frontier", "lawnmower"}
+    baselines = {p.name: p for p in points if p.group == "baselines"}
+    assert set(baselines) == {"greedy", "frontier", "lawnmower"}
+    assert len([p for p in points if p.group == "shipped policy"]) == 1
+    for baseline, field, value in DOCUMENTED_LINES[name]:
+        assert getattr(baselines[baseline], field) == pytest.approx(
+            value, abs=0.051 if abs(value) > 1 else 5e-5
+        )
     assert "shipped policy" in capsys.readouterr().out  # the shipped policy is on the front
 
 
@@ -150,3 +172,44 @@ def test_a_metric_with_no_better_side_is_plotted_without_a_front(tmp_path, capsy
     assert main([str(tmp_path / "a.json"), "--y", "anees", "--plot", str(tmp_path / "a.png")]) == 0
     assert "no Pareto front" in capsys.readouterr().out
     assert (tmp_path / "a.png").is_file()
+
+
+def test_what_evaluate_writes_is_read_undefined_metrics_and_all(tmp_path, capsys):
+    """evaluate --episodes-json writes a NaN metric (an episode that saw no landmark) as null."""
+    rng = np.random.default_rng(5)
+    episodes = _episodes(rng, 9)
+    episodes[4]["landmark_rmse"] = math.nan
+    (tmp_path / "ppo.json").write_text(json.dumps(json_safe({"ppo": episodes})))
+    assert "null" in (tmp_path / "ppo.json").read_text()
+    assert main([str(tmp_path / "ppo.json"), "--csv", str(tmp_path / "p.csv")]) == 0
+    capsys.readouterr()
+    (point,) = read_csv(tmp_path / "p.csv")[2]
+    expected = aggregate(episodes, ("landmark_rmse",))["landmark_rmse"]
+    assert (point.y, [point.y_lo, point.y_hi]) == (expected["iqm"], expected["ci"])
+    assert point.episodes == 9
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [({"m": [1, 2]}, "is not a mapping of metrics"), ({}, "hold no models"), ({"m": []}, "has no episodes")],
+)
+def test_the_command_refuses_json_with_no_episodes_to_read(tmp_path, capsys, content, message):
+    (tmp_path / "a.json").write_text(json.dumps(content))
+    with pytest.raises(SystemExit):
+        main([str(tmp_path / "a.json")])
+    assert message in capsys.readouterr().err
+
+
+def test_a_csv_is_known_by_its_suffix_in_any_case_and_labels_go_to_the_json_files(tmp_path, capsys):
+    rng = np.random.default_rng(6)
+    write_csv(
+        [Point("old", "m", 3, 1.0, 0, 2, 3.0, 2, 4)], tmp_path / "old.CSV", "map_log_det", "landmark_rmse"
+    )
+    (tmp_path / "new.json").write_text(json.dumps({"n": _episodes(rng, 6)}))
+    args = [str(tmp_path / "old.CSV"), str(tmp_path / "new.json"), "--label", "new runs"]
+    assert main(args + ["--csv", str(tmp_path / "both.csv")]) == 0
+    capsys.readouterr()
+    assert [(p.group, p.name) for p in read_csv(tmp_path / "both.csv")[2]] == [
+        ("old", "m"),
+        ("new runs", "n"),
+    ]

@@ -34,10 +34,12 @@ def _reference_line(text: str) -> tuple[float, str]:
         raise argparse.ArgumentTypeError(f"expected VALUE or VALUE:TEXT, got {text!r}") from None
 
 
+def _is_csv(path: Path) -> bool:
+    return path.suffix.lower() == ".csv"
+
+
 def _load(path: Path, label: str | None, x: str, y: str) -> list[Point]:
-    if path.suffix == ".csv":
-        if label is not None:
-            raise ValueError(f"{path}: a CSV keeps its own groups, so --label does not apply to it")
+    if _is_csv(path):
         file_x, file_y, points = read_csv(path)
         if (file_x, file_y) != (x, y):
             raise ValueError(f"{path} holds {file_x} against {file_y}, not {x} against {y}")
@@ -79,17 +81,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--title")
     args = parser.parse_args(argv)
 
-    json_files = [f for f in args.files if f.suffix != ".csv"]
+    json_files = [f for f in args.files if not _is_csv(f)]
     if len(args.label) > len(json_files):
         parser.error(f"{len(args.label)} --label for {len(json_files)} JSON files")
     labels = iter(args.label)
     points: list[Point] = []
     try:
         for path in args.files:
-            label = next(labels, None) if path.suffix != ".csv" else None
+            label = None if _is_csv(path) else next(labels, None)
             points.extend(_load(path, label, args.x, args.y))
     except (OSError, ValueError) as error:  # JSONDecodeError is a ValueError
         parser.error(str(error))
+    if not points:
+        parser.error("the files hold no models")
     groups = {p.group for p in points}
     for group in args.ci + args.annotate:
         if group not in groups:

@@ -52,11 +52,14 @@ def points_from_episodes(
     for name, eps in episodes.items():
         if not eps:
             raise ValueError(f"{group}: {name!r} has no episodes")
-        for key in (x, y):
-            missing = [i for i, e in enumerate(eps) if key not in e]
-            if missing:
-                raise ValueError(f"{group}: episode {missing[0]} of {name!r} has no {key!r}")
-        table = aggregate(eps, (x, y))
+        for i, e in enumerate(eps):
+            if not isinstance(e, Mapping):
+                raise ValueError(f"{group}: episode {i} of {name!r} is not a mapping of metrics")
+            for key in (x, y):
+                if key not in e:
+                    raise ValueError(f"{group}: episode {i} of {name!r} has no {key!r}")
+        # evaluate's JSON writes an undefined metric (NaN) as null
+        table = aggregate([{k: math.nan if e[k] is None else e[k] for k in (x, y)} for e in eps], (x, y))
         points.append(
             Point(group, name, len(eps), table[x]["iqm"], *table[x]["ci"], table[y]["iqm"], *table[y]["ci"])
         )
@@ -97,7 +100,8 @@ def write_csv(points: Iterable[Point], path: str | Path, x: str, y: str) -> Path
         writer.writerow(["group", "name", "episodes", x, f"{x}_lo", f"{x}_hi", y, f"{y}_lo", f"{y}_hi"])
         for p in points:
             writer.writerow(
-                [p.group, p.name, p.episodes] + [repr(v) for v in (p.x, p.x_lo, p.x_hi, p.y, p.y_lo, p.y_hi)]
+                [p.group, p.name, p.episodes]
+                + [repr(float(v)) for v in (p.x, p.x_lo, p.x_hi, p.y, p.y_lo, p.y_hi)]
             )
     return path
 
@@ -154,10 +158,11 @@ def tradeoff_figure(
         xs = np.array([p.x for p in members])
         ys = np.array([p.y for p in members])
         if group in ci_groups:
+            # a percentile interval can miss its IQM by a hair; matplotlib refuses negative bar lengths
             ax.errorbar(
                 xs, ys,
-                xerr=[xs - [p.x_lo for p in members], [p.x_hi for p in members] - xs],
-                yerr=[ys - [p.y_lo for p in members], [p.y_hi for p in members] - ys],
+                xerr=np.maximum(0.0, [xs - [p.x_lo for p in members], [p.x_hi for p in members] - xs]),
+                yerr=np.maximum(0.0, [ys - [p.y_lo for p in members], [p.y_hi for p in members] - ys]),
                 fmt="none", ecolor=colour, alpha=0.5, capsize=2, linewidth=0.8,
             )  # fmt: skip
         many = len(members) > 30
