@@ -402,13 +402,14 @@ class FrontierAgent(Agent):
         if self._relocalize_switch():
             self._relocalizing = not self._relocalizing
             self._landmark = -1
+        full = None  # the whole grid's search, once one was needed
         if self._relocalizing:
             self._goal = None
-            dist, parent = grid_paths(self._wall, sources, self._cell)
-            if self._plan_relocalize(pose, dist, parent):
+            full = grid_paths(self._wall, sources, self._cell)
+            if self._plan_relocalize(pose, *full):
                 self._index = 0
                 return
-            self._relocalizing = False  # no landmark certain enough to help: explore on
+            self._relocalizing = False  # no landmark certain enough to help: explore on, on the same search
         frontier = self.frontiers()
         every_landmark_seen = bool(np.all(np.asarray(self.env.filter.observed)))
         rows, cols = np.nonzero(frontier)
@@ -418,11 +419,12 @@ class FrontierAgent(Agent):
             turn, home = self._goal_terms(pose, rows, cols)
             extra = np.full(frontier.shape, np.inf)
             extra[rows, cols] = turn if home is None else turn + home
-            dist, parent = nearest_paths(self._wall, sources, self._cell, extra, self.switch_margin)
+            # the full search holds the bounded one's paths exactly, and the goal chosen on either is the same
+            dist, parent = full or nearest_paths(self._wall, sources, self._cell, extra, self.switch_margin)
             reached = np.isfinite(dist[rows, cols])
             exploring = bool(reached.any())
         else:
-            dist, parent = grid_paths(self._wall, sources, self._cell)
+            dist, parent = full or grid_paths(self._wall, sources, self._cell)
         if exploring:
             self.mode = "explore"
             self._landmark = -1
