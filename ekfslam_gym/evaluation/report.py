@@ -41,6 +41,12 @@ BETTER: dict[str, str | None] = {
 }
 
 
+def metric_label(key: str) -> str:
+    """A metric's name with the way that is better, for a plot's axis or title."""
+    better = BETTER.get(key)
+    return f"{key} ({better} is better)" if better else key
+
+
 def json_safe(value: Any) -> Any:
     """NaN and inf are not JSON: write them as null."""
     if isinstance(value, float):
@@ -128,8 +134,7 @@ def plot_results(
                 ax.errorbar([p], [centre], yerr=[[centre - lo], [hi - centre]], fmt="o", color="tab:red",
                             markersize=4, capsize=3)  # fmt: skip
         ax.set_xticks(positions, names, rotation=30, fontsize=8)
-        arrow = {"higher": " (higher is better)", "lower": " (lower is better)"}.get(BETTER[key] or "", "")
-        ax.set_title(key + arrow, fontsize=9)
+        ax.set_title(metric_label(key), fontsize=9)
         ax.tick_params(axis="y", labelsize=8)
     figure.suptitle("box: episodes; red: IQM with 95 % bootstrap CI", fontsize=9)
     path = Path(path)

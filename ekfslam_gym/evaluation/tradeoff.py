@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .aggregate import aggregate
-from .report import BETTER
+from .report import BETTER, metric_label
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -123,11 +123,6 @@ def read_csv(path: str | Path) -> tuple[str, str, list[Point]]:
     return x, y, points
 
 
-def _label(key: str) -> str:
-    better = BETTER.get(key)
-    return f"{key} ({better} is better)" if better else key
-
-
 def tradeoff_figure(
     points: Sequence[Point],
     x: str,
@@ -184,8 +179,8 @@ def tradeoff_figure(
         ax.axhline(value, color="0.5", linestyle=":", linewidth=1)
         ax.annotate(text, (1, value), xycoords=("axes fraction", "data"), xytext=(-3, 3),
                     textcoords="offset points", ha="right", fontsize=7, color="0.35")  # fmt: skip
-    ax.set_xlabel(_label(x))
-    ax.set_ylabel(_label(y))
+    ax.set_xlabel(metric_label(x))
+    ax.set_ylabel(metric_label(y))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="best")
     ax.set_title(title or "IQM over each model's episodes", fontsize=9, wrap=True)
