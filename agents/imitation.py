@@ -18,6 +18,7 @@ checks that section. torch and stable-baselines3 are imported only when cloning.
 
 from __future__ import annotations
 
+import copy
 import json
 import time
 from collections.abc import Mapping
@@ -50,6 +51,7 @@ PRETRAIN_DEFAULTS: dict[str, Any] = {
     "learning_rate": 1.0e-3,  # Adam's, for cloning only (PPO keeps its own optimiser)
     "holdout": 0.1,  # fraction of the demonstration episodes held back to report accuracy on
     "value": True,  # also fit the value head to the demonstrations' discounted (normalised) returns
+    "best_epoch": False,  # keep the epoch whose weights best predict the held-back episodes (early stopping)
     "path": None,  # a demonstrations .npz to reuse instead of collecting (same env id and env_kwargs; a reward may differ)
     "dagger_rounds": 0,  # DAgger rounds after cloning: the clone drives, the planner labels, clone again
     "dagger_episodes": 50,  # episodes per DAgger round, on the seeds after seed + episodes (path: those too)
@@ -100,8 +102,11 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
     holdout = settings["holdout"]
     if isinstance(holdout, bool) or not isinstance(holdout, (int, float)) or not 0 <= holdout < 1:
         raise ValueError(f"pretrain.holdout must be a fraction in [0, 1), got {holdout!r}")
-    if not isinstance(settings["value"], bool):
-        raise ValueError(f"pretrain.value must be true or false, got {settings['value']!r}")
+    for key in ("value", "best_epoch"):
+        if not isinstance(settings[key], bool):
+            raise ValueError(f"pretrain.{key} must be true or false, got {settings[key]!r}")
+    if settings["best_epoch"] and not holdout > 0:
+        raise ValueError("pretrain.best_epoch picks an epoch by the held-back episodes: it needs holdout > 0")
     kwargs = settings["planner_kwargs"]
     if kwargs is not None and not (isinstance(kwargs, Mapping) and all(isinstance(k, str) for k in kwargs)):
         raise ValueError(f"pretrain.planner_kwargs must be a mapping of keyword arguments, got {kwargs!r}")
@@ -214,8 +219,11 @@ def returns_to_go(rewards: np.ndarray, episodes: np.ndarray, gamma: float) -> np
 @dataclass
 class CloneReport:
     """What cloning achieved: accuracy on the pairs it was trained on and on the held-back episodes (NaN when
-    none), and the last epoch's mean losses. Accuracy: the fraction of pairs whose most likely action is the
-    planner's (Discrete), or lies within ``BOX_MATCH`` of it (Box, Euclidean, in the action's units)."""
+    none), and the mean losses of the epoch kept. Accuracy: the fraction of pairs whose most likely action is the
+    planner's (Discrete), or lies within ``BOX_MATCH`` of it (Box, Euclidean, in the action's units).
+    ``holdout_by_epoch`` is the held-back accuracy before the first epoch and after each (empty when nothing is
+    held back); ``kept_epoch`` is the epoch whose weights the policy ends with (``epochs`` unless ``best_epoch``
+    chose an earlier one; 0 is the weights cloning started from), and the accuracies above are theirs."""
 
     train_pairs: int
     holdout_pairs: int
@@ -226,6 +234,8 @@ class CloneReport:
     value_loss: float
     epochs: int
     seconds: float
+    holdout_by_epoch: list[float]
+    kept_epoch: int
 
 
 def split_episodes(
@@ -328,6 +338,7 @@ def behaviour_clone(
     value: bool = True,
     seed: int = 0,
     held: np.ndarray | None = None,
+    best_epoch: bool = False,
 ) -> CloneReport:
     """Train ``model.policy`` (an SB3 actor-critic on a Discrete or Box action space, feed-forward or sb3-contrib's
     recurrent one, which is trained on whole episodes: ``SequenceBatches``) to choose the demonstrated
@@ -335,7 +346,11 @@ def behaviour_clone(
     ``fit_normalizer``). With ``value``, the value head also regresses the demonstrations' discounted returns
     (rewards normalised as the VecNormalize would, discounted with ``model.gamma``). ``held`` (bool per pair)
     fixes the held-back pairs, else ``holdout`` of the episodes are drawn with ``seed``, which also orders the
-    minibatches; torch's global generator is left alone, so the run's own seed still drives PPO afterwards."""
+    minibatches; torch's global generator is left alone, so the run's own seed still drives PPO afterwards.
+    With ``best_epoch``, the policy ends with the weights of the epoch (0 included: those it started from) of
+    highest held-back accuracy, the earliest on ties: early stopping, for a policy that overfits the pairs it is
+    trained on (a recurrent one cloned again after a DAgger round). The held-back accuracy is measured after
+    every epoch either way; it draws nothing at random, so it leaves the cloning as it was."""
     import torch
     from gymnasium import spaces
     from stable_baselines3.common.utils import obs_as_tensor
@@ -386,9 +401,26 @@ def behaviour_clone(
                 matches.append(np.linalg.norm(np.clip(chosen, low, high) - wanted, axis=1) <= BOX_MATCH)
         return float(np.mean(np.concatenate(matches)))
 
+    if best_epoch and len(hold_idx) == 0:
+        raise ValueError("best_epoch chooses the epoch on the held-back episodes, and none are held back")
+
+    def measure() -> None:
+        """Records the held-back accuracy of the weights as they are; keeps them if best so far."""
+        nonlocal kept, kept_state
+        if len(hold_idx) == 0:
+            return
+        policy.set_training_mode(False)
+        curve.append(accuracy(hold_idx))
+        policy.set_training_mode(True)
+        if best_epoch and curve[-1] > curve[kept]:
+            kept, kept_state = len(curve) - 1, copy.deepcopy(policy.state_dict())
+
+    curve: list[float] = []
+    kept, kept_state = 0, copy.deepcopy(policy.state_dict()) if best_epoch else None
     optimizer = torch.optim.Adam(policy.parameters(), lr=float(learning_rate))
     policy.set_training_mode(True)
-    action_loss = value_loss = float("nan")
+    measure()
+    losses = [(float("nan"), float("nan"))]  # each epoch's mean (action, value) losses, none before the first
     for _ in range(int(epochs)):
         sums, pairs = np.zeros(2), 0
         for batch, mask, n_seq in batcher.minibatches(train_idx, int(batch_size), rng):
@@ -409,14 +441,20 @@ def behaviour_clone(
             optimizer.step()
             sums += [loss_a.item() * n, loss_v.item() * n]
             pairs += int(n)
-        action_loss, value_loss = (sums / max(pairs, 1)).tolist()
+        losses.append(tuple((sums / max(pairs, 1)).tolist()))
+        measure()
+    if not best_epoch:
+        kept = int(epochs)
+    elif kept < int(epochs):
+        policy.load_state_dict(kept_state)
     policy.set_training_mode(False)
+    action_loss, value_loss = losses[kept]
     return CloneReport(
         train_pairs=int(len(train_idx)), holdout_pairs=int(len(hold_idx)),
         holdout_episodes=int(len(np.unique(demos.episodes[hold_idx]))), train_accuracy=accuracy(train_idx),
-        holdout_accuracy=accuracy(hold_idx), action_loss=action_loss,
+        holdout_accuracy=curve[kept] if curve else float("nan"), action_loss=action_loss,
         value_loss=value_loss if value else float("nan"), epochs=int(epochs),
-        seconds=time.perf_counter() - start,
+        seconds=time.perf_counter() - start, holdout_by_epoch=curve, kept_epoch=kept,
     )  # fmt: skip
 
 
@@ -491,7 +529,7 @@ def pretrain(model: Any, env_id: str, entry: Mapping[str, Any], out: Path) -> di
             fit_normalizer(normalizer, demos)
         return behaviour_clone(model, demos, epochs=epochs, batch_size=settings["batch_size"],
                                learning_rate=settings["learning_rate"], value=settings["value"],
-                               seed=settings["seed"], held=held)  # fmt: skip
+                               seed=settings["seed"], held=held, best_epoch=settings["best_epoch"])  # fmt: skip
 
     reports = [clone(settings["epochs"])]
     agreement = []

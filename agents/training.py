@@ -403,8 +403,9 @@ def train(
             from .imitation import pretrain
 
             report = pretrain(model, env_id, entry, out)["clone"]
+            kept = "" if report["kept_epoch"] == report["epochs"] else f" (epoch {report['kept_epoch']} kept)"
             print(f"behaviour cloning: accuracy {report['train_accuracy']:.3f} on the demonstrations, "
-                  f"{report['holdout_accuracy']:.3f} on the held-back ones", file=sys.stderr)  # fmt: skip
+                  f"{report['holdout_accuracy']:.3f} on the held-back ones{kept}", file=sys.stderr)  # fmt: skip
         remaining = total
         reset = True
     else:
