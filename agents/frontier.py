@@ -415,12 +415,14 @@ class FrontierAgent(Agent):
         rows, cols = np.nonzero(frontier)
         exploring = rows.size > 0 and not every_landmark_seen
         if exploring:
-            # only the frontier cells within switch_margin of the cheapest matter below: search no further
             turn, home = self._goal_terms(pose, rows, cols)
-            extra = np.full(frontier.shape, np.inf)
-            extra[rows, cols] = turn if home is None else turn + home
+            if full is None:
+                # only the frontier cells within switch_margin of the cheapest matter below: search no further
+                extra = np.full(frontier.shape, np.inf)
+                extra[rows, cols] = turn if home is None else turn + home
+                full = nearest_paths(self._wall, sources, self._cell, extra, self.switch_margin)
             # the full search holds the bounded one's paths exactly, and the goal chosen on either is the same
-            dist, parent = full or nearest_paths(self._wall, sources, self._cell, extra, self.switch_margin)
+            dist, parent = full
             reached = np.isfinite(dist[rows, cols])
             exploring = bool(reached.any())
         else:

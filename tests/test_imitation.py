@@ -317,6 +317,26 @@ def test_best_epoch_keeps_the_weights_of_the_epoch_that_best_predicts_the_held_b
         behaviour_clone(last_model, demos, epochs=1, holdout=0.0, best_epoch=True)
 
 
+def test_best_epoch_keeps_the_earliest_of_tied_epochs():
+    """Ties go to the earliest epoch, so early stopping never trains longer than it has to: at learning rate 0
+    no epoch moves the weights, the held-back curve is flat, and the epoch kept is 0, the weights cloning began
+    with, whose report it gives."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    torch.set_num_threads(1)
+    model = PPO("MlpPolicy", DummyVecEnv([LabelEnv]), seed=0, n_steps=64, batch_size=64)
+    start = {name: tensor.clone() for name, tensor in model.policy.state_dict().items()}
+    report = behaviour_clone(model, noisy_labels(), epochs=4, batch_size=32, learning_rate=0.0, holdout=0.25,
+                             seed=0, best_epoch=True)  # fmt: skip
+    assert len(report.holdout_by_epoch) == 5 and len(set(report.holdout_by_epoch)) == 1
+    assert report.kept_epoch == 0 and report.holdout_accuracy == report.holdout_by_epoch[0]
+    assert np.isnan(report.action_loss)  # epoch 0 trained nothing, so it has no loss to report
+    weights = model.policy.state_dict()
+    assert all(torch.equal(weights[name], start[name]) for name in start)
+
+
 def cue_task(n_episodes=120, seed=0):
     """Episodes of 8-24 steps whose every action is a cue shown only at the first step (one-hot in the first
     three components; zeros afterwards, with the fourth component counting time): only a policy that remembers
