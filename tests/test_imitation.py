@@ -673,3 +673,30 @@ def test_the_shipped_large_model_records_its_recipe_and_the_variants_differ_only
     assert cnn["normalize"].pop("norm_obs_keys")
     cnn["policy"] = mlp["policy"]
     assert cnn == mlp
+
+
+def test_the_recurrent_home_keep_recipe_is_the_shipped_one_with_the_lstm_and_early_stopping():
+    """configs/ppo_lstm_primitives_home_keep_bc.yaml is the shipped Large recipe with the recurrent recipe's
+    policy (the algorithm, LSTM, minibatch and learning rate of configs/ppo_lstm_primitives_relocalize03_bc.yaml)
+    and best_epoch; from that recurrent recipe it differs only in the teacher, the hold and best_epoch."""
+    import train
+
+    def entry(name):
+        return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
+
+    lstm_home, shipped, lstm = (
+        entry("ppo_lstm_primitives_home_keep_bc"),
+        entry("ppo_primitives_home_keep_bc"),
+        entry("ppo_lstm_primitives_relocalize03_bc"),
+    )
+    assert lstm_home["algo"] == "ppo_lstm" and lstm_home["pretrain"]["best_epoch"] is True
+    policy_keys = ("algo", "policy", "policy_kwargs", "batch_size", "learning_rate")
+    assert {k: lstm_home[k] for k in policy_keys} == {k: lstm[k] for k in policy_keys}
+    assert any(lstm_home[k] != shipped[k] for k in policy_keys)
+    shipped_like = {**lstm_home, **{k: shipped[k] for k in policy_keys}}
+    shipped_like["pretrain"] = {**lstm_home["pretrain"], "best_epoch": False}
+    assert shipped_like == shipped
+    lstm_like = dict(lstm_home)
+    lstm_like["pretrain"] = {**lstm_home["pretrain"], "planner_kwargs": {"relocalize_std": 0.3},
+                             "keep_cloning": None, "best_epoch": False}  # fmt: skip
+    assert lstm_like == lstm
