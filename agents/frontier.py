@@ -416,13 +416,14 @@ class FrontierAgent(Agent):
         exploring = rows.size > 0 and not every_landmark_seen
         if exploring:
             turn, home = self._goal_terms(pose, rows, cols)
-            if full is None:
+            paths = full
+            if paths is None:
                 # only the frontier cells within switch_margin of the cheapest matter below: search no further
                 extra = np.full(frontier.shape, np.inf)
                 extra[rows, cols] = turn if home is None else turn + home
-                full = nearest_paths(self._wall, sources, self._cell, extra, self.switch_margin)
+                paths = nearest_paths(self._wall, sources, self._cell, extra, self.switch_margin)
             # the full search holds the bounded one's paths exactly, and the goal chosen on either is the same
-            dist, parent = full
+            dist, parent = paths
             reached = np.isfinite(dist[rows, cols])
             exploring = bool(reached.any())
         else:
