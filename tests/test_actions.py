@@ -11,6 +11,7 @@ import pytest
 
 import ekfslam_gym  # noqa: F401  (registers the envs)
 from ekfslam_gym.envs import PRIMITIVES, EKFSLAMEnv
+from ekfslam_gym.envs.actions import MotionPrimitives
 
 KINDS = [
     {"kind": "velocity", "hold": 5},
@@ -209,6 +210,29 @@ def test_a_guarded_primitive_stops_short_of_the_wall_ahead(guard):
     assert np.all(infos[-1]["inner_actions"] == 0.0)  # a straight primitive that is blocked stands still
     info = env.step(np.int64(3))[4]  # a blocked arc keeps its turn, and drives on once it has turned clear
     assert tuple(info["inner_actions"][0]) == (0.0, np.float32(PRIMITIVES[3][1])) and not info["collision"]
+
+
+def test_a_guarded_primitive_backs_off_a_wall_it_is_already_against():
+    """A robot the guard finds within ``guard`` of a wall ahead (the scan can miss a wall's end between its
+    beams until the robot is upon it) backs off, turn kept, instead of standing against the wall; a straight
+    primitive then stands at the guard, out of contact."""
+    guard = 0.3
+    env = _open_arena("primitives", guard=guard)
+    guarded = env.unwrapped._interface
+    env.unwrapped._interface = MotionPrimitives()  # unguarded: drive straight into the wall
+    while env.step(np.int64(0))[4]["collision"] == 0:
+        pass
+    assert _gap_to_walls(env) < 0.05
+    env.unwrapped._interface = guarded
+    info = env.step(np.int64(3))[4]  # an arc: backs off while turning
+    backoff = guarded.controller.backoff
+    assert tuple(info["inner_actions"][0]) == (-backoff, np.float32(PRIMITIVES[3][1]))
+    assert np.all(info["inner_actions"][:, 1] == np.float32(PRIMITIVES[3][1]))
+    for _ in range(3):
+        info = env.step(np.int64(0))[4]
+    assert not info["collision"] and np.all(info["inner_actions"] == 0.0)  # standing clear of the wall
+    step = env.config.robot.v_max * env.config.dt
+    assert 0.5 * guard < _gap_to_walls(env) < guard + 2 * step
 
 
 def test_the_guards_skip_bound_changes_no_decision():

@@ -9,7 +9,8 @@ command the env offers two macro actions, each driven for up to ``action.hold`` 
   held for ``hold`` control steps (default 1: one env step is one control step).
 - ``primitives``: ``Discrete(K)``, one of ``PRIMITIVES`` (the greedy planner's motion primitives), held for
   ``hold`` control steps (default 10); with ``action.guard`` g m (default 0: off), a control step whose forward
-  travel would bring the robot within g of a wall the scan shows ahead keeps only the primitive's turn.
+  travel would bring the robot within g of a wall the scan shows ahead keeps only the primitive's turn, and
+  one that finds the robot already within g of it backs off while keeping the turn.
 - ``waypoint``: ``Box(-1, 1, (2,))``, a goal (forward, left) x ``waypoint_radius`` m relative to the *estimated*
   pose when the step begins, driven by ``WaypointController`` from the pose estimate and the wall scan only
   (never the true pose or map) until it reaches the goal, a wall in the scan blocks it, or ``hold`` (default
@@ -142,9 +143,10 @@ class MotionPrimitives(ActionInterface):
 class GuardedPrimitives(MotionPrimitives):
     """``MotionPrimitives`` with ``action.guard``: a control step whose forward travel (``step`` m at full speed)
     would bring the robot within ``guard`` m of a wall the scan shows ahead, as ``controller`` measures the room
-    ahead, keeps only the primitive's turn. The robot stops short of the wall, as a waypoint does, instead of
-    sliding along it (each contact step costs the wheel odometry a slip of 0.35 m per m commanded,
-    ``WheelOdometryNoise``). A class of its own, so that unguarded primitives pay nothing for it."""
+    ahead, keeps only the primitive's turn; one that finds the robot already within ``guard`` of it backs off,
+    turn kept (``_backoff``). The robot stops short of the wall, as a waypoint does, instead of sliding along
+    it (each contact step costs the wheel odometry a slip of 0.35 m per m commanded, ``WheelOdometryNoise``).
+    A class of its own, so that unguarded primitives pay nothing for it."""
 
     def __init__(self, guard: float, controller: WaypointController, step: float) -> None:
         super().__init__()
@@ -159,12 +161,20 @@ class GuardedPrimitives(MotionPrimitives):
         forward, turn = self._command
         if forward > 0.0:
             scan = scan_of()
-            if (
-                scan.min() < self._far
-                and self.controller.clearance_ahead(scan) < self.guard + forward * self.step
-            ):
-                return 0.0, turn
+            if scan.min() < self._far:
+                ahead = self.controller.clearance_ahead(scan)
+                if ahead < self.guard + forward * self.step:
+                    return self._backoff(scan) if ahead < self.guard else 0.0, turn
         return self._command
+
+    def _backoff(self, scan: np.ndarray) -> float:
+        """The forward command of a step that finds the robot already within the guard of a wall ahead: the
+        scan's beams (16 by default) can miss a wall's end between two of them until the robot is upon it, and a
+        turn can sweep a wall alongside into the way. It backs off at the controller's ``backoff`` speed while
+        the scan shows room behind, else stands; without this a policy whose forward primitives are stopped
+        can stay against the wall, turning to and fro."""
+        behind = self.controller.clearances(scan)[1]
+        return -self.controller.backoff if behind > self.guard + self.controller.backoff * self.step else 0.0
 
 
 class Waypoint(ActionInterface):
