@@ -238,8 +238,9 @@ class ActionConfig:
     controller). hold: control steps per env step, at most for a waypoint (default 1 for velocity, 10 for the
     others). waypoint_radius: m, the reach of a waypoint goal (the action's unit). guard: m, primitives only: a
     control step whose forward travel would bring the robot within this distance of a wall the scan shows
-    ahead turns without driving forward, so the robot stops short of walls instead of sliding along them (a
-    contact costs the odometry a slip; 0, the default, is off).
+    ahead turns without driving forward, and one that finds the robot already that near backs off, so the robot
+    stops short of walls instead of sliding along them (a contact costs the odometry a slip; 0, the default, is
+    off).
     """
 
     kind: str = "velocity"

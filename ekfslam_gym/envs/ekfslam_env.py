@@ -41,7 +41,8 @@ class EKFSLAMEnv(gym.Env):
     the ``action`` section offers macro actions, each driven for up to ``action.hold`` control steps
     (``ekfslam_gym.envs.actions``): ``primitives``, ``Discrete(9)``, one of the greedy planner's motion
     primitives (``PRIMITIVES``), held (with ``action.guard`` m, a control step that would bring the robot
-    within that distance of a wall the scan shows ahead keeps only its turn); ``waypoint``,
+    within that distance of a wall the scan shows ahead keeps only its turn, and one that finds it already
+    within that distance backs off, turn kept); ``waypoint``,
     ``Box(-1, 1, (2,))``, a goal (forward, left) x ``action.waypoint_radius`` m from the estimated pose,
     driven by a controller that sees only the pose estimate and the wall scan, until reached, blocked by a
     wall, or ``hold`` steps. A macro step's reward is
