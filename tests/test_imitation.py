@@ -630,15 +630,12 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_im
     assert bonus == base
 
 
-def test_the_shipped_large_model_records_its_recipe_and_the_variants_differ_only_where_named():
-    """models/ppo_EKFSLAM-Large-v0.zip was trained from configs/ppo_primitives_home_keep_bc.yaml (its record holds
-    that entry, less where its demonstrations were read: a file the same settings had collected), which differs
-    from configs/ppo_primitives_relocalize03_bc.yaml (the recipe shipped before) only in the teacher's settings
-    and the cloning kept up during fine-tuning; that one from configs/ppo_primitives_relocalize_bc.yaml only in
-    the teacher's loop-closing threshold, and configs/ppo_belief_cnn_relocalize_bc.yaml from that only in the
-    observation's reader: the belief image and the CNN extractor."""
-    import yaml
-
+def test_the_large_mlp_recipes_differ_only_where_named():
+    """configs/ppo_primitives_home_keep_bc.yaml (the recipe shipped before the recurrent one) differs from
+    configs/ppo_primitives_relocalize03_bc.yaml (shipped before it) only in the teacher's settings and the cloning
+    kept up during fine-tuning; that one from configs/ppo_primitives_relocalize_bc.yaml only in the teacher's
+    loop-closing threshold, and configs/ppo_belief_cnn_relocalize_bc.yaml from that only in the observation's
+    reader: the belief image and the CNN extractor."""
     import train
 
     def entry(name):
@@ -650,13 +647,7 @@ def test_the_shipped_large_model_records_its_recipe_and_the_variants_differ_only
         entry("ppo_primitives_relocalize_bc"),
         entry("ppo_belief_cnn_relocalize_bc"),
     )
-    record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-Large-v0_config.yaml").read_text())
-    assert record["env_id"] == "EKFSLAM-Large-v0"
     assert home["pretrain"]["path"] is None
-    assert record["entry"]["pretrain"].pop("path").endswith("demonstrations.npz")
-    record["entry"]["pretrain"]["path"] = None
-    record["entry"]["pretrain"].setdefault("best_epoch", False)  # recorded before the key existed
-    assert record["entry"] == home
     assert home["pretrain"]["planner_kwargs"] == {"home_weight": 0.5}
     assert home["pretrain"]["keep_cloning"] == {"batches": 8, "learning_rate": 3.0e-5, "decay": 0.97}
     home["pretrain"].update(planner_kwargs={"relocalize_std": 0.3}, keep_cloning=None)
@@ -675,16 +666,17 @@ def test_the_shipped_large_model_records_its_recipe_and_the_variants_differ_only
     assert cnn == mlp
 
 
-def test_the_recurrent_home_keep_recipe_is_the_shipped_one_with_the_lstm_and_early_stopping():
-    """configs/ppo_lstm_primitives_home_keep_bc.yaml is the shipped Large recipe with the recurrent recipe's
-    policy (the algorithm, LSTM, minibatch and learning rate of configs/ppo_lstm_primitives_relocalize03_bc.yaml)
-    and best_epoch; from that recurrent recipe it differs only in the teacher, the hold and best_epoch."""
+def test_the_recurrent_home_keep_recipe_is_the_mlp_one_with_the_lstm_and_early_stopping():
+    """configs/ppo_lstm_primitives_home_keep_bc.yaml is configs/ppo_primitives_home_keep_bc.yaml (the MLP recipe
+    shipped before the recurrent one) with the recurrent recipe's policy (the algorithm, LSTM, minibatch and
+    learning rate of configs/ppo_lstm_primitives_relocalize03_bc.yaml) and best_epoch; from that recurrent recipe
+    it differs only in the teacher, the hold and best_epoch."""
     import train
 
     def entry(name):
         return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
 
-    lstm_home, shipped, lstm = (
+    lstm_home, mlp_home, lstm = (
         entry("ppo_lstm_primitives_home_keep_bc"),
         entry("ppo_primitives_home_keep_bc"),
         entry("ppo_lstm_primitives_relocalize03_bc"),
@@ -692,11 +684,36 @@ def test_the_recurrent_home_keep_recipe_is_the_shipped_one_with_the_lstm_and_ear
     assert lstm_home["algo"] == "ppo_lstm" and lstm_home["pretrain"]["best_epoch"] is True
     policy_keys = ("algo", "policy", "policy_kwargs", "batch_size", "learning_rate")
     assert {k: lstm_home[k] for k in policy_keys} == {k: lstm[k] for k in policy_keys}
-    assert any(lstm_home[k] != shipped[k] for k in policy_keys)
-    shipped_like = {**lstm_home, **{k: shipped[k] for k in policy_keys}}
-    shipped_like["pretrain"] = {**lstm_home["pretrain"], "best_epoch": False}
-    assert shipped_like == shipped
+    assert any(lstm_home[k] != mlp_home[k] for k in policy_keys)
+    mlp_home_like = {**lstm_home, **{k: mlp_home[k] for k in policy_keys}}
+    mlp_home_like["pretrain"] = {**lstm_home["pretrain"], "best_epoch": False}
+    assert mlp_home_like == mlp_home
     lstm_like = dict(lstm_home)
     lstm_like["pretrain"] = {**lstm_home["pretrain"], "planner_kwargs": {"relocalize_std": 0.3},
                              "keep_cloning": None, "best_epoch": False}  # fmt: skip
     assert lstm_like == lstm
+
+
+def test_the_shipped_large_model_records_the_recurrent_recipe_at_pose_variance_6():
+    """models/ppo_EKFSLAM-Large-v0.zip was trained from configs/ppo_lstm_primitives_home_keep_pv6_bc.yaml: its
+    record holds that entry, less where its demonstrations were read (a file the same settings had collected,
+    under the reward of pose_variance 8, reweighted). That config is configs/ppo_lstm_primitives_home_keep_bc.yaml
+    with the pose-variance charge at 6 instead of 8, and nothing else."""
+    import yaml
+
+    import train
+
+    def entry(name):
+        return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
+
+    pv6, lstm_home = entry("ppo_lstm_primitives_home_keep_pv6_bc"), entry("ppo_lstm_primitives_home_keep_bc")
+    record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-Large-v0_config.yaml").read_text())
+    assert record["env_id"] == "EKFSLAM-Large-v0" and record["entry"]["algo"] == "ppo_lstm"
+    assert pv6["pretrain"]["path"] is None
+    assert record["entry"]["pretrain"].pop("path").endswith("demonstrations.npz")
+    record["entry"]["pretrain"]["path"] = None
+    assert record["entry"] == pv6
+    assert pv6["env_kwargs"]["reward"] == {"collision": 5.0, "pose_variance": 6.0}
+    assert lstm_home["env_kwargs"]["reward"] == {"collision": 5.0, "pose_variance": 8.0}
+    pv6["env_kwargs"]["reward"]["pose_variance"] = 8.0
+    assert pv6 == lstm_home

@@ -160,7 +160,10 @@ def test_the_documented_figures_redraw_from_their_csvs_with_their_baselines_line
         assert getattr(baselines[baseline], field) == pytest.approx(
             value, abs=0.051 if abs(value) > 1 else 5e-5
         )
-    assert "shipped policy" in capsys.readouterr().out  # the shipped policy is on the front
+    front = capsys.readouterr().out
+    # docs/results.md says whether the shipped policy is on each front: held out on Large, a final of its own
+    # recipe (seed 0's final, -236 / 0.102 m) beats it on both metrics
+    assert ("shipped policy" in front) == (name != "Large-v0_heldout")
 
 
 def test_a_metric_with_no_better_side_is_plotted_without_a_front(tmp_path, capsys):
