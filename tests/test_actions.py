@@ -220,8 +220,9 @@ def test_a_guarded_primitive_backs_off_a_wall_it_is_already_against():
     env = _open_arena("primitives", guard=guard)
     guarded = env.unwrapped._interface
     env.unwrapped._interface = MotionPrimitives()  # unguarded: drive straight into the wall
-    while env.step(np.int64(0))[4]["collision"] == 0:
-        pass
+    for _ in range(30):
+        if env.step(np.int64(0))[4]["collision"]:
+            break
     assert _gap_to_walls(env) < 0.05
     env.unwrapped._interface = guarded
     info = env.step(np.int64(3))[4]  # an arc: backs off while turning

@@ -630,22 +630,25 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_im
     assert bonus == base
 
 
+def _large_entry(name):
+    """configs/<name>.yaml's EKFSLAM-Large-v0 entry, as train.py reads it."""
+    import train
+
+    return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
+
+
 def test_the_large_mlp_recipes_differ_only_where_named():
     """configs/ppo_primitives_home_keep_bc.yaml (the recipe shipped before the recurrent one) differs from
     configs/ppo_primitives_relocalize03_bc.yaml (shipped before it) only in the teacher's settings and the cloning
     kept up during fine-tuning; that one from configs/ppo_primitives_relocalize_bc.yaml only in the teacher's
     loop-closing threshold, and configs/ppo_belief_cnn_relocalize_bc.yaml from that only in the observation's
     reader: the belief image and the CNN extractor."""
-    import train
-
-    def entry(name):
-        return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
 
     home, shipped, mlp, cnn = (
-        entry("ppo_primitives_home_keep_bc"),
-        entry("ppo_primitives_relocalize03_bc"),
-        entry("ppo_primitives_relocalize_bc"),
-        entry("ppo_belief_cnn_relocalize_bc"),
+        _large_entry("ppo_primitives_home_keep_bc"),
+        _large_entry("ppo_primitives_relocalize03_bc"),
+        _large_entry("ppo_primitives_relocalize_bc"),
+        _large_entry("ppo_belief_cnn_relocalize_bc"),
     )
     assert home["pretrain"]["path"] is None
     assert home["pretrain"]["planner_kwargs"] == {"home_weight": 0.5}
@@ -671,15 +674,11 @@ def test_the_recurrent_home_keep_recipe_is_the_mlp_one_with_the_lstm_and_early_s
     shipped before the recurrent one) with the recurrent recipe's policy (the algorithm, LSTM, minibatch and
     learning rate of configs/ppo_lstm_primitives_relocalize03_bc.yaml) and best_epoch; from that recurrent recipe
     it differs only in the teacher, the hold and best_epoch."""
-    import train
-
-    def entry(name):
-        return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
 
     lstm_home, mlp_home, lstm = (
-        entry("ppo_lstm_primitives_home_keep_bc"),
-        entry("ppo_primitives_home_keep_bc"),
-        entry("ppo_lstm_primitives_relocalize03_bc"),
+        _large_entry("ppo_lstm_primitives_home_keep_bc"),
+        _large_entry("ppo_primitives_home_keep_bc"),
+        _large_entry("ppo_lstm_primitives_relocalize03_bc"),
     )
     assert lstm_home["algo"] == "ppo_lstm" and lstm_home["pretrain"]["best_epoch"] is True
     policy_keys = ("algo", "policy", "policy_kwargs", "batch_size", "learning_rate")
@@ -703,10 +702,10 @@ def test_the_shipped_large_model_records_the_recurrent_recipe_at_pose_variance_6
 
     import train
 
-    def entry(name):
-        return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
-
-    pv6, lstm_home = entry("ppo_lstm_primitives_home_keep_pv6_bc"), entry("ppo_lstm_primitives_home_keep_bc")
+    pv6, lstm_home = (
+        _large_entry("ppo_lstm_primitives_home_keep_pv6_bc"),
+        _large_entry("ppo_lstm_primitives_home_keep_bc"),
+    )
     record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-Large-v0_config.yaml").read_text())
     assert record["env_id"] == "EKFSLAM-Large-v0" and record["entry"]["algo"] == "ppo_lstm"
     assert pv6["pretrain"]["path"] is None
