@@ -693,26 +693,31 @@ def test_the_recurrent_home_keep_recipe_is_the_mlp_one_with_the_lstm_and_early_s
     assert lstm_like == lstm
 
 
-def test_the_shipped_large_model_records_the_recurrent_recipe_at_pose_variance_6():
-    """models/ppo_EKFSLAM-Large-v0.zip was trained from configs/ppo_lstm_primitives_home_keep_pv6_bc.yaml: its
+def test_the_shipped_large_model_records_the_recurrent_recipe_at_pose_variance_4():
+    """models/ppo_EKFSLAM-Large-v0.zip was trained from configs/ppo_lstm_primitives_home_keep_pv4_bc.yaml: its
     record holds that entry, less where its demonstrations were read (a file the same settings had collected,
-    under the reward of pose_variance 8, reweighted). That config is configs/ppo_lstm_primitives_home_keep_bc.yaml
-    with the pose-variance charge at 6 instead of 8, and nothing else."""
+    under the reward of pose_variance 8, reweighted). That config and the one at 6 shipped before it are
+    configs/ppo_lstm_primitives_home_keep_bc.yaml with the pose-variance charge at 4 and 6 instead of 8, and
+    nothing else."""
     import yaml
 
     import train
 
-    pv6, lstm_home = (
+    pv4, pv6, lstm_home = (
+        _large_entry("ppo_lstm_primitives_home_keep_pv4_bc"),
         _large_entry("ppo_lstm_primitives_home_keep_pv6_bc"),
         _large_entry("ppo_lstm_primitives_home_keep_bc"),
     )
     record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-Large-v0_config.yaml").read_text())
     assert record["env_id"] == "EKFSLAM-Large-v0" and record["entry"]["algo"] == "ppo_lstm"
-    assert pv6["pretrain"]["path"] is None
+    assert record["seed"] == 1
+    assert pv4["pretrain"]["path"] is None
     assert record["entry"]["pretrain"].pop("path").endswith("demonstrations.npz")
     record["entry"]["pretrain"]["path"] = None
-    assert record["entry"] == pv6
+    assert record["entry"] == pv4
+    assert pv4["env_kwargs"]["reward"] == {"collision": 5.0, "pose_variance": 4.0}
     assert pv6["env_kwargs"]["reward"] == {"collision": 5.0, "pose_variance": 6.0}
     assert lstm_home["env_kwargs"]["reward"] == {"collision": 5.0, "pose_variance": 8.0}
-    pv6["env_kwargs"]["reward"]["pose_variance"] = 8.0
-    assert pv6 == lstm_home
+    for charged in (pv4, pv6):
+        charged["env_kwargs"]["reward"]["pose_variance"] = 8.0
+        assert charged == lstm_home
