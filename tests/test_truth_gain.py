@@ -205,6 +205,33 @@ def test_pose_variance_reward_is_minus_its_weight_times_the_pose_position_varian
     assert all(c < 0.0 for c in costs) and min(costs) < costs[0]  # a variance, and it grows somewhere
 
 
+@pytest.mark.parametrize("filter_", [{}, {"association": "nearest"}], ids=["known", "unknown"])
+def test_pose_error_reward_is_minus_its_weight_times_the_true_squared_position_error(filter_):
+    """The optional ``pose_error`` term costs weight x |(x, y) estimate - true|^2 after each control step (read
+    against the filter's mean and ``info["true_pose"]``), the rest of the reward is unchanged, and it is not the
+    variance term: the error and the variance differ step by step."""
+    weight = 3.0
+    plain = EKFSLAMEnv(max_episode_steps=80, filter=filter_)
+    shaped = EKFSLAMEnv(max_episode_steps=80, filter=filter_, reward={"pose_error": weight})
+    plain.reset(seed=6)
+    shaped.reset(seed=6)
+    rng = np.random.default_rng(9)
+    ratios = []
+    for _ in range(80):
+        a = rng.uniform(-1, 1, 2).astype(np.float32)
+        _, reward_plain, *_ = plain.step(a)
+        _, reward, terminated, truncated, info = shaped.step(a)
+        term = info["reward_terms"]["pose_error"]
+        error = np.asarray(shaped.filter.mean)[:2] - np.asarray(info["true_pose"])[:2]
+        assert term == pytest.approx(-weight * float(error @ error), rel=1e-12, abs=1e-15)
+        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
+        cov = np.asarray(shaped.filter.cov)
+        ratios.append(-term / weight / (cov[0, 0] + cov[1, 1]))
+        if terminated or truncated:
+            break
+    assert all(r >= 0.0 for r in ratios) and max(ratios) - min(ratios) > 0.1
+
+
 def _log_rms_std(env: EKFSLAMEnv) -> float:
     """ln sqrt(mean tr Sigma_jj) over the slots the filter holds a landmark in, from its covariance; NaN if none."""
     cov = np.asarray(env.filter.cov)

@@ -91,6 +91,9 @@ class EKFSLAMEnv(gym.Env):
     ``pose_variance`` (-w tr Sigma_xy, the pose estimate's position variance in m^2, each control step: a cost
     on being lost, which pays for staying localised and closing loops; landmarks first seen from an uncertain
     pose are placed as uncertainly, so the map's absolute accuracy inherits it),
+    ``pose_error`` (-w |(x, y) estimate - true|^2 in m^2, each control step: ``pose_variance``'s counterpart in
+    the truth, which also charges a pose that has gone wrong while the filter is sure of it; it reads the true
+    pose, so it is a training signal only, like an asymmetric critic's, and the observation stays the belief),
     ``map_accuracy`` (w times the drop of ln R, R = sqrt(mean_j tr Sigma_jj) over the landmarks seen, the
     landmark RMSE a consistent filter expects; the terms sum to w ln(R_first / R_final) from the first step
     with a landmark seen, so a discovery placed less certainly than the map so far costs and a loop closure
@@ -522,6 +525,12 @@ class EKFSLAMEnv(gym.Env):
     def _reward_pose_variance(self, weight: float) -> float:
         cov = self._belief[1]
         return -weight * float(cov[0, 0] + cov[1, 1])
+
+    def _reward_pose_error(self, weight: float) -> float:
+        mean = self._belief[0]
+        x, y, _ = self._world.pose_tuple
+        dx, dy = float(mean[0]) - x, float(mean[1]) - y
+        return -weight * (dx * dx + dy * dy)
 
     def _reward_map_accuracy(self, weight: float) -> float:
         previous, self._log_map_rms = self._log_map_rms, self._log_map_rms_std()

@@ -50,6 +50,14 @@ REWARD_TERMS: tuple[RewardTerm, ...] = (
         "placed as uncertainly), so it pays for staying localised and for closing loops; 0 by default",
     ),
     RewardTerm(
+        "pose_error",
+        0.0,
+        "penalty per m^2 of the pose estimate's squared position error |(x, y) estimate - true|^2, per control "
+        "step: pose_variance's counterpart in the truth, which also charges the over-confident pose (small "
+        "variance, large error) that pose_variance cannot see; it reads the true pose, so it is for training "
+        "only (the observation stays the belief, as in asymmetric actor-critic); 0 by default",
+    ),
+    RewardTerm(
         "map_accuracy",
         0.0,
         "weight per drop of ln R, R = sqrt(mean_j tr Sigma_jj) over the landmarks seen (the landmark RMSE a "
