@@ -4,7 +4,7 @@ CI that resamples the seeds, keeping each seed's episodes of every model togethe
 Models evaluated on the same seeds share each seed's world and noise, so a hard seed is hard for both groups;
 resampling seeds rather than episodes (a cluster bootstrap) removes that shared part from the difference's
 interval, which is then narrower than the two groups' own intervals suggest when the seed explains much of a
-metric. It is the paired comparison that Agarwal et al. (NeurIPS 2021) recommend over comparing two CIs by eye.
+metric. The IQM and the percentile bootstrap are ``aggregate``'s (Agarwal et al., NeurIPS 2021).
 """
 
 from __future__ import annotations
