@@ -179,29 +179,38 @@ def test_evaluation_reports_the_belief_truth_correlation_and_the_final_map_nees(
     assert row["map_nees"] == pytest.approx(nees / index.size, rel=1e-9)
 
 
+def _beside_plain(reward: dict, steps: int, seed: int, action_seed: int, **kwargs):
+    """Steps an env with ``reward`` beside one with the default reward, on the same seeded random velocity
+    commands, until the episode ends; yields (the shaped env, its reward, the plain env's reward, its info)."""
+    plain = EKFSLAMEnv(max_episode_steps=steps, **kwargs)
+    shaped = EKFSLAMEnv(max_episode_steps=steps, reward=reward, **kwargs)
+    plain.reset(seed=seed)
+    shaped.reset(seed=seed)
+    rng = np.random.default_rng(action_seed)
+    for _ in range(steps):
+        a = rng.uniform(-1, 1, 2).astype(np.float32)
+        _, reward_plain, *_ = plain.step(a)
+        _, shaped_reward, terminated, truncated, info = shaped.step(a)
+        yield shaped, shaped_reward, reward_plain, info
+        if terminated or truncated:
+            return
+
+
 def test_pose_variance_reward_is_minus_its_weight_times_the_pose_position_variance():
     """The optional ``pose_variance`` term costs weight x tr Sigma_xy of the pose estimate after each control step
     (read against ``info["pose_cov"]`` and the filter's own covariance), the rest of the reward is unchanged,
     and the cost grows while the robot explores without re-observing (dead reckoning between sightings)."""
     weight = 7.0
-    plain = EKFSLAMEnv(max_episode_steps=60)
-    shaped = EKFSLAMEnv(max_episode_steps=60, reward={"pose_variance": weight})
-    plain.reset(seed=3)
-    shaped.reset(seed=3)
-    rng = np.random.default_rng(8)
     costs = []
-    for _ in range(60):
-        a = rng.uniform(-1, 1, 2).astype(np.float32)
-        _, reward_plain, *_ = plain.step(a)
-        _, reward, terminated, truncated, info = shaped.step(a)
+    for shaped, reward, reward_plain, info in _beside_plain(
+        {"pose_variance": weight}, 60, seed=3, action_seed=8
+    ):
         term = info["reward_terms"]["pose_variance"]
         cov = np.asarray(shaped.filter.cov)
         assert term == -weight * (cov[0, 0] + cov[1, 1])
         assert term == -weight * (info["pose_cov"][0, 0] + info["pose_cov"][1, 1])
         assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
         costs.append(term)
-        if terminated or truncated:
-            break
     assert all(c < 0.0 for c in costs) and min(costs) < costs[0]  # a variance, and it grows somewhere
 
 
@@ -211,24 +220,15 @@ def test_pose_error_reward_is_minus_its_weight_times_the_true_squared_position_e
     against the filter's mean and ``info["true_pose"]``), the rest of the reward is unchanged, and it is not the
     variance term: the error and the variance differ step by step."""
     weight = 3.0
-    plain = EKFSLAMEnv(max_episode_steps=80, filter=filter_)
-    shaped = EKFSLAMEnv(max_episode_steps=80, filter=filter_, reward={"pose_error": weight})
-    plain.reset(seed=6)
-    shaped.reset(seed=6)
-    rng = np.random.default_rng(9)
     ratios = []
-    for _ in range(80):
-        a = rng.uniform(-1, 1, 2).astype(np.float32)
-        _, reward_plain, *_ = plain.step(a)
-        _, reward, terminated, truncated, info = shaped.step(a)
+    stepped = _beside_plain({"pose_error": weight}, 80, seed=6, action_seed=9, filter=filter_)
+    for shaped, reward, reward_plain, info in stepped:
         term = info["reward_terms"]["pose_error"]
         error = np.asarray(shaped.filter.mean)[:2] - np.asarray(info["true_pose"])[:2]
         assert term == pytest.approx(-weight * float(error @ error), rel=1e-12, abs=1e-15)
         assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
         cov = np.asarray(shaped.filter.cov)
         ratios.append(-term / weight / (cov[0, 0] + cov[1, 1]))
-        if terminated or truncated:
-            break
     assert all(r >= 0.0 for r in ratios) and max(ratios) - min(ratios) > 0.1
 
 

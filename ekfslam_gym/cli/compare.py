@@ -58,11 +58,8 @@ def main(argv: list[str] | None = None) -> int:
         results = [
             paired_difference(a, b, m, n_resamples=args.resamples) for m in args.metric or DEFAULT_METRICS
         ]
-    except (
-        OSError,
-        KeyError,
-        ValueError,
-    ) as error:  # JSONDecodeError is a ValueError; KeyError: a missing metric
+    except (OSError, KeyError, ValueError) as error:
+        # a JSONDecodeError is a ValueError; a KeyError is a metric the episodes lack
         parser.error(str(error))
     print(f"group a: {len(a)} models, group b: {len(b)} models, on {results[0].seeds} seeds; IQM over the pooled "
           "episodes, a - b with its 95 % CI over resampled seeds")  # fmt: skip
