@@ -721,3 +721,41 @@ def test_the_shipped_large_model_records_the_recurrent_recipe_at_pose_variance_4
     for charged in (pv4, pv6):
         charged["env_kwargs"]["reward"]["pose_variance"] = 8.0
         assert charged == lstm_home
+
+
+def test_the_recurrent_belief_cnn_recipe_is_the_shipped_large_one_reading_the_image(tmp_path):
+    """configs/ppo_lstm_belief_cnn_home_keep_pv4_bc.yaml is configs/ppo_lstm_primitives_home_keep_pv4_bc.yaml
+    (models/ppo_EKFSLAM-Large-v0.zip's recipe) with the Dict observation's belief image read by BeliefCNN in a
+    MultiInputLstmPolicy, and nothing else; at smoke size its demonstrations are cloned into that policy with
+    one DAgger round, and PPO starts from the clone."""
+    import train
+    from agents import PPOAgent
+    from agents.extractors import BeliefCNN
+
+    cnn, shipped = (
+        _large_entry("ppo_lstm_belief_cnn_home_keep_pv4_bc"),
+        _large_entry("ppo_lstm_primitives_home_keep_pv4_bc"),
+    )
+    assert cnn["policy"] == "MultiInputLstmPolicy" and shipped["policy"] == "MlpLstmPolicy"
+    assert cnn["policy_kwargs"].pop("features_extractor_class") == "agents.extractors.BeliefCNN"
+    cnn["policy_kwargs"].pop("features_extractor_kwargs")
+    assert cnn["env_kwargs"].pop("observation")["belief_image"] is True
+    assert "belief_image" not in cnn["normalize"].pop("norm_obs_keys")  # the image is already in [0, 1]
+    assert cnn["normalize"] == shipped["normalize"]
+    cnn["normalize"] = shipped["normalize"]
+    cnn["policy"] = shipped["policy"]
+    assert cnn == shipped
+
+    config, out = "configs/ppo_lstm_belief_cnn_home_keep_pv4_bc.yaml", tmp_path / "run"
+    train.main(["--config", config, "--env-id", "EKFSLAM-Large-v0", "--timesteps", "64", "--out", str(out),
+                "--seed", "0", "--no-progress", "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1",
+                "n_envs=1", "eval_freq=0", "checkpoint_freq=0",
+                "pretrain={planner: frontier, planner_kwargs: {home_weight: 0.5}, episodes: 2, epochs: 2, "
+                "dagger_rounds: 1, dagger_episodes: 1, best_epoch: true}",
+                "env_kwargs={action: {kind: primitives, hold: 10}, max_episode_steps: 8, "
+                "observation: {kind: dict, belief_image: true, belief_size: 16, belief_extent: 12.0}}"])  # fmt: skip
+    assert json.loads((out / "pretrain.json").read_text())["pairs"] == 24
+    for name in ("bc_model.zip", "model.zip"):
+        agent = PPOAgent(out / name)
+        assert type(agent.model).__name__ == "RecurrentPPO" and agent.recurrent
+        assert isinstance(agent.model.policy.features_extractor, BeliefCNN)
