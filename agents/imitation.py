@@ -350,7 +350,10 @@ def behaviour_clone(
     With ``best_epoch``, the policy ends with the weights of the epoch (0 included: those it started from) of
     highest held-back accuracy, the earliest on ties: early stopping, for a policy that overfits the pairs it is
     trained on (a recurrent one cloned again after a DAgger round). The held-back accuracy is measured after
-    every epoch either way; it draws nothing at random, so it leaves the cloning as it was."""
+    every epoch either way; it draws nothing at random, so it leaves the cloning as it was. The action and value
+    losses share one gradient-norm clip (``max_grad_norm`` over every parameter, as SB3's PPO update does), so
+    the rewards reach the cloned actions through the value loss's size: one demonstrations file cloned under two
+    reward settings gives two clones (with ``value=False``, one)."""
     import torch
     from gymnasium import spaces
     from stable_baselines3.common.utils import obs_as_tensor

@@ -280,6 +280,33 @@ def noisy_labels(n_episodes=12, length=40, flip=0.4, seed=0):
     return Demonstrations(clean.observations, actions, clean.rewards, clean.episodes, clean.seeds)
 
 
+def test_the_rewards_reach_the_cloned_actions_only_through_the_value_heads_share_of_the_gradient_clip():
+    """The same demonstrations under two reward settings: without the value head the clones' actors are
+    identical; with it they differ, because the action and value losses share one gradient-norm clip
+    (``max_grad_norm`` over every parameter, as SB3's PPO does), so the value loss's size scales the actor's
+    steps. Why two Large runs reading one file under different rewards start from different clones."""
+    import copy
+
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    torch.set_num_threads(1)
+
+    def actor_after_cloning(reward_scale, value):
+        torch.manual_seed(0)
+        model = PPO("MlpPolicy", DummyVecEnv([LabelEnv]), seed=0, n_steps=64, batch_size=64, gamma=0.9)
+        demos = copy.deepcopy(synthetic())
+        demos.rewards = demos.rewards * reward_scale
+        behaviour_clone(model, demos, epochs=3, batch_size=128, learning_rate=3e-3, seed=0, value=value)
+        actor = ("action_net", "mlp_extractor.policy_net")
+        params = [p.detach().flatten() for n, p in model.policy.named_parameters() if n.startswith(actor)]
+        return torch.cat(params)
+
+    assert torch.equal(actor_after_cloning(1.0, False), actor_after_cloning(10.0, False))
+    assert not torch.equal(actor_after_cloning(1.0, True), actor_after_cloning(10.0, True))
+
+
 def test_best_epoch_keeps_the_weights_of_the_epoch_that_best_predicts_the_held_back_episodes():
     """Early stopping: the held-back accuracy is measured before and after every epoch; with ``best_epoch`` the
     policy ends with the weights of the first epoch of highest accuracy, which are exactly those cloning for that
