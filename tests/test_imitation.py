@@ -285,8 +285,6 @@ def test_the_rewards_reach_the_cloned_actions_only_through_the_value_heads_share
     identical; with it they differ, because the action and value losses share one gradient-norm clip
     (``max_grad_norm`` over every parameter, as SB3's PPO does), so the value loss's size scales the actor's
     steps. Why two Large runs reading one file under different rewards start from different clones."""
-    import copy
-
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import DummyVecEnv
@@ -296,7 +294,7 @@ def test_the_rewards_reach_the_cloned_actions_only_through_the_value_heads_share
     def actor_after_cloning(reward_scale, value):
         torch.manual_seed(0)
         model = PPO("MlpPolicy", DummyVecEnv([LabelEnv]), seed=0, n_steps=64, batch_size=64, gamma=0.9)
-        demos = copy.deepcopy(synthetic())
+        demos = synthetic()
         demos.rewards = demos.rewards * reward_scale
         behaviour_clone(model, demos, epochs=3, batch_size=128, learning_rate=3e-3, seed=0, value=value)
         actor = ("action_net", "mlp_extractor.policy_net")
@@ -540,14 +538,14 @@ def test_a_recurrent_config_clones_the_planner_with_a_dagger_round_at_smoke_size
     assert first["map_log_det"] == again["map_log_det"]  # deterministic, its LSTM state reset at each episode
 
 
-def _smoke_train(config, out, pretrain, action_kind):
-    """``config``'s EKFSLAM-v0 entry through train.py at smoke size: two demonstration episodes of 8 decisions
-    (Dict observation with the belief image), cloned for two epochs, then 64 steps of PPO, into ``out``."""
+def _smoke_train(config, out, pretrain, action_kind, env_id="EKFSLAM-v0"):
+    """``config``'s ``env_id`` entry through train.py at smoke size: the demonstration episodes ``pretrain`` asks
+    for, of 8 decisions (Dict observation with the belief image), cloned, then 64 steps of PPO, into ``out``."""
     import train
 
-    train.main(["--config", config, "--timesteps", "64", "--out", str(out), "--seed", "0", "--no-progress",
-                "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1", "eval_freq=0",
-                "checkpoint_freq=0", f"pretrain={pretrain}",
+    train.main(["--config", config, "--env-id", env_id, "--timesteps", "64", "--out", str(out), "--seed", "0",
+                "--no-progress", "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1",
+                "eval_freq=0", "checkpoint_freq=0", f"pretrain={pretrain}",
                 f"env_kwargs={{action: {{kind: {action_kind}, hold: 10}}, max_episode_steps: 8, "
                 "observation: {kind: dict, belief_image: true}}"])  # fmt: skip
 
@@ -755,7 +753,6 @@ def test_the_recurrent_belief_cnn_recipe_is_the_shipped_large_one_reading_the_im
     (models/ppo_EKFSLAM-Large-v0.zip's recipe) with the Dict observation's belief image read by BeliefCNN in a
     MultiInputLstmPolicy, and nothing else; at smoke size its demonstrations are cloned into that policy with
     one DAgger round, and PPO starts from the clone."""
-    import train
     from agents import PPOAgent
     from agents.extractors import BeliefCNN
 
@@ -773,14 +770,13 @@ def test_the_recurrent_belief_cnn_recipe_is_the_shipped_large_one_reading_the_im
     cnn["policy"] = shipped["policy"]
     assert cnn == shipped
 
-    config, out = "configs/ppo_lstm_belief_cnn_home_keep_pv4_bc.yaml", tmp_path / "run"
-    train.main(["--config", config, "--env-id", "EKFSLAM-Large-v0", "--timesteps", "64", "--out", str(out),
-                "--seed", "0", "--no-progress", "--hyperparams", "n_steps=32", "batch_size=32", "n_epochs=1",
-                "n_envs=1", "eval_freq=0", "checkpoint_freq=0",
-                "pretrain={planner: frontier, planner_kwargs: {home_weight: 0.5}, episodes: 2, epochs: 2, "
-                "dagger_rounds: 1, dagger_episodes: 1, best_epoch: true}",
-                "env_kwargs={action: {kind: primitives, hold: 10}, max_episode_steps: 8, "
-                "observation: {kind: dict, belief_image: true, belief_size: 16, belief_extent: 12.0}}"])  # fmt: skip
+    out = tmp_path / "run"
+    pretrain = (
+        "{planner: frontier, planner_kwargs: {home_weight: 0.5}, episodes: 2, epochs: 2, dagger_rounds: 1, "
+        "dagger_episodes: 1, best_epoch: true}"
+    )
+    config = "configs/ppo_lstm_belief_cnn_home_keep_pv4_bc.yaml"
+    _smoke_train(config, out, pretrain, "primitives", "EKFSLAM-Large-v0")
     assert json.loads((out / "pretrain.json").read_text())["pairs"] == 24
     for name in ("bc_model.zip", "model.zip"):
         agent = PPOAgent(out / name)
