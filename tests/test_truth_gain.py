@@ -275,6 +275,56 @@ def test_map_accuracy_reward_telescopes_to_the_log_ratio_of_the_expected_landmar
     assert min(terms) < 0.0 < max(terms)  # both a costly discovery and a paying re-observation happened
 
 
+def _mse(env: EKFSLAMEnv) -> float:
+    """The mean squared position error over the slots holding a landmark, from the filter and the truth; NaN if none."""
+    errors = _errors(env)
+    return float(np.nanmean(errors)) if np.isfinite(errors).any() else math.nan
+
+
+@pytest.mark.parametrize(
+    "filter_, action",
+    [({}, {}), ({"association": "nearest"}, {}), ({}, {"action": {"kind": "primitives", "hold": 10}})],
+    ids=["known", "unknown", "primitives"],
+)
+def test_map_error_reward_telescopes_to_the_drop_of_the_true_mean_squared_landmark_error(filter_, action):
+    """The optional ``map_error`` term pays weight x the drop of the seen landmarks' true mean squared position
+    error (read against the filter's landmarks and the true ones, and against ``info["map_rmse"]``), 0 until a
+    landmark is seen, the rest of the reward is unchanged, and over an episode the terms sum to weight x
+    (MSE_first - MSE_final), in a macro step too (summed over its inner steps); a discovery placed worse than
+    the map so far costs, a correction pays."""
+    weight = 5000.0
+    steps = 30 if action else 150
+    plain = EKFSLAMEnv(max_episode_steps=steps, filter=filter_, **action)
+    shaped = EKFSLAMEnv(max_episode_steps=steps, filter=filter_, reward={"map_error": weight}, **action)
+    plain.reset(seed=5)
+    shaped.reset(seed=5)
+    first = previous = _mse(shaped)
+    rng = np.random.default_rng(6)
+    total, terms = 0.0, []
+    for a in _held_actions(2, steps):
+        if action:
+            a = int(rng.integers(9))
+        _, reward_plain, *_ = plain.step(a)
+        _, reward, terminated, truncated, info = shaped.step(a)
+        term = info["reward_terms"]["map_error"]
+        now = _mse(shaped)
+        assert now == pytest.approx(info["map_rmse"] ** 2, rel=1e-9, abs=1e-15)
+        if math.isnan(previous):
+            first = now
+            if not action:
+                assert term == 0.0
+        elif not action:
+            assert term == pytest.approx(weight * (previous - now), rel=1e-9, abs=1e-12)
+        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
+        previous = now
+        total += term
+        terms.append(term)
+        if terminated or truncated:
+            break
+    assert total == pytest.approx(weight * (first - previous), rel=1e-9, abs=1e-9)
+    assert min(terms) < 0.0 < max(terms)  # both a costly discovery and a paying correction happened
+
+
 @pytest.mark.parametrize("action", [{}, {"action": {"kind": "primitives", "hold": 10}}])
 def test_map_variance_reward_is_its_weight_times_the_belief_gain(action):
     """The optional ``map_variance`` term pays weight x ``info["belief_gain"]`` (summed over a macro step's inner

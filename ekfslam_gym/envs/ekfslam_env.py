@@ -97,7 +97,11 @@ class EKFSLAMEnv(gym.Env):
     ``map_accuracy`` (w times the drop of ln R, R = sqrt(mean_j tr Sigma_jj) over the landmarks seen, the
     landmark RMSE a consistent filter expects; the terms sum to w ln(R_first / R_final) from the first step
     with a landmark seen, so a discovery placed less certainly than the map so far costs and a loop closure
-    pays: beside ``info_gain``, which pays for certainty, it weighs the map's accuracy).
+    pays: beside ``info_gain``, which pays for certainty, it weighs the map's accuracy), ``map_error`` (w times
+    the drop of the seen landmarks' true mean squared position error, ``info["map_rmse"]`` squared, from the
+    first step with a landmark seen: ``map_accuracy``'s counterpart in the truth, which telescopes to
+    w (MSE_first - MSE_final), the scored landmark RMSE squared; it reads the true landmarks, so it is a
+    training signal only, like ``pose_error``).
 
     Standing still earns little: every prediction adds odometry noise (the noise floor), a negative term, and
     re-observing the same landmarks pays ever less (the information about them grows like ln t). Because the
@@ -324,6 +328,7 @@ class EKFSLAMEnv(gym.Env):
             self._mark_walls()
         nees, rmse, _, self._worst_variance, seen, _, _ = self._step_metrics(read)
         self._log_map_rms = self._log_map_rms_std() if weights.map_accuracy else math.nan
+        self._map_mse = self._step_mse = rmse * rmse if seen else math.nan
         info = self._info({"info_gain": 0.0}, nees, rmse, seen, 0.0, 0.0)
         if self.render_mode == "human":
             self.render()
@@ -430,6 +435,7 @@ class EKFSLAMEnv(gym.Env):
         nees, rmse, closures, self._worst_variance, seen, truth_gain, belief_gain = self._step_metrics(read)
         self._loop_closures += closures
         self._belief_gain = belief_gain
+        self._step_mse = rmse * rmse if seen else math.nan
         terms = self._rewards()
         reward = sum(terms.values(), 0.0)
         return terms, reward, self._is_terminated(), nees, rmse, seen, truth_gain, belief_gain, False
@@ -537,6 +543,12 @@ class EKFSLAMEnv(gym.Env):
         if math.isnan(previous) or math.isnan(self._log_map_rms):
             return 0.0  # no landmark seen yet: the sum starts at the first one
         return weight * (previous - self._log_map_rms)
+
+    def _reward_map_error(self, weight: float) -> float:
+        previous, self._map_mse = self._map_mse, self._step_mse
+        if math.isnan(previous) or math.isnan(self._map_mse):
+            return 0.0  # no landmark seen yet: the sum starts at the first one
+        return weight * (previous - self._map_mse)
 
     def _log_map_rms_std(self) -> float:
         """ln sqrt(mean_j tr Sigma_jj) over the landmarks (slots) scored as seen by the last ``_step_metrics``,

@@ -66,6 +66,14 @@ REWARD_TERMS: tuple[RewardTerm, ...] = (
         "accuracy against its certainty; 0 by default",
     ),
     RewardTerm(
+        "map_error",
+        0.0,
+        "weight per m^2 drop of the seen landmarks' true mean squared position error (info['map_rmse']^2, the "
+        "landmark RMSE the evaluation scores, squared): telescopes to w (MSE_first - MSE_final), so it charges a "
+        "discovery placed worse than the map so far and pays a correction; map_accuracy's counterpart in the "
+        "truth, for training only like pose_error (it reads the true landmarks); 0 by default",
+    ),
+    RewardTerm(
         "coverage",
         0.0,
         "bonus per m^2 of the world the sensor looks at for the first time (the coverage memory), an "
