@@ -282,38 +282,48 @@ def _mse(env: EKFSLAMEnv) -> float:
 
 
 @pytest.mark.parametrize(
-    "filter_, action",
-    [({}, {}), ({"association": "nearest"}, {}), ({}, {"action": {"kind": "primitives", "hold": 10}})],
-    ids=["known", "unknown", "primitives"],
+    "kwargs, seed",
+    [
+        ({}, 5),
+        ({"filter": {"association": "nearest"}}, 5),
+        ({"action": {"kind": "primitives", "hold": 10}}, 5),
+        ({"sensor": {"max_range": 2.0}}, 3),  # nothing in range at reset: the first landmark comes at step 25
+    ],
+    ids=["known", "unknown", "primitives", "none-seen-at-reset"],
 )
-def test_map_error_reward_telescopes_to_the_drop_of_the_true_mean_squared_landmark_error(filter_, action):
+def test_map_error_reward_telescopes_to_the_drop_of_the_true_mean_squared_landmark_error(kwargs, seed):
     """The optional ``map_error`` term pays weight x the drop of the seen landmarks' true mean squared position
     error (read against the filter's landmarks and the true ones, and against ``info["map_rmse"]``), 0 until a
     landmark is seen, the rest of the reward is unchanged, and over an episode the terms sum to weight x
     (MSE_first - MSE_final), in a macro step too (summed over its inner steps); a discovery placed worse than
     the map so far costs, a correction pays."""
     weight = 5000.0
-    steps = 30 if action else 150
-    plain = EKFSLAMEnv(max_episode_steps=steps, filter=filter_, **action)
-    shaped = EKFSLAMEnv(max_episode_steps=steps, filter=filter_, reward={"map_error": weight}, **action)
-    plain.reset(seed=5)
-    shaped.reset(seed=5)
+    macro = "action" in kwargs
+    steps = 30 if macro else 150
+    plain = EKFSLAMEnv(max_episode_steps=steps, **kwargs)
+    shaped = EKFSLAMEnv(max_episode_steps=steps, reward={"map_error": weight}, **kwargs)
+    plain.reset(seed=seed)
+    shaped.reset(seed=seed)
     first = previous = _mse(shaped)
+    assert math.isnan(first) == (seed == 3)
     rng = np.random.default_rng(6)
     total, terms = 0.0, []
     for a in _held_actions(2, steps):
-        if action:
+        if macro:
             a = int(rng.integers(9))
         _, reward_plain, *_ = plain.step(a)
         _, reward, terminated, truncated, info = shaped.step(a)
         term = info["reward_terms"]["map_error"]
         now = _mse(shaped)
-        assert now == pytest.approx(info["map_rmse"] ** 2, rel=1e-9, abs=1e-15)
+        if math.isnan(now):
+            assert info["landmarks_seen"] == 0 and term == 0.0
+        else:
+            assert now == pytest.approx(info["map_rmse"] ** 2, rel=1e-9, abs=1e-15)
         if math.isnan(previous):
             first = now
-            if not action:
+            if not macro:
                 assert term == 0.0
-        elif not action:
+        elif not macro:
             assert term == pytest.approx(weight * (previous - now), rel=1e-9, abs=1e-12)
         assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
         previous = now
