@@ -242,6 +242,43 @@ def _log_rms_std(env: EKFSLAMEnv) -> float:
     return 0.5 * math.log(traces.mean())
 
 
+def _telescoping_term(name, weight, measure, steps, seed, check=None, **kwargs):
+    """Steps an env paying ``name`` at ``weight`` beside one with the default reward, on the tests' held random
+    velocity commands (seeded random primitives in a macro env), until the episode ends, and checks that the term
+    is 0 while ``measure(env)`` is NaN (nothing seen yet), weight x its drop over each control step, and the only
+    change to the reward; ``check(info, now, term)`` adds a test of each step. Returns the episode's terms and
+    the measure at reset, at its first finite value and at the end."""
+    macro = "action" in kwargs
+    plain = EKFSLAMEnv(max_episode_steps=steps, **kwargs)
+    shaped = EKFSLAMEnv(max_episode_steps=steps, reward={name: weight}, **kwargs)
+    plain.reset(seed=seed)
+    shaped.reset(seed=seed)
+    at_reset = first = previous = measure(shaped)
+    rng = np.random.default_rng(6)
+    terms = []
+    for a in _held_actions(2, steps):
+        if macro:
+            a = int(rng.integers(9))
+        _, reward_plain, *_ = plain.step(a)
+        _, reward, terminated, truncated, info = shaped.step(a)
+        term = info["reward_terms"][name]
+        now = measure(shaped)
+        if check is not None:
+            check(info, now, term)
+        if math.isnan(previous):
+            first = now
+            if not macro:  # a macro step's terms also hold its inner steps after the first landmark
+                assert term == 0.0
+        elif not macro:
+            assert term == pytest.approx(weight * (previous - now), rel=1e-9, abs=1e-12)
+        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
+        previous = now
+        terms.append(term)
+        if terminated or truncated:
+            break
+    return terms, at_reset, first, previous
+
+
 @pytest.mark.parametrize("filter_", [{}, {"association": "nearest"}], ids=["known", "unknown"])
 def test_map_accuracy_reward_telescopes_to_the_log_ratio_of_the_expected_landmark_rmse(filter_):
     """The optional ``map_accuracy`` term pays weight x the drop of ln sqrt(mean_j tr Sigma_jj) over the seen
@@ -249,29 +286,8 @@ def test_map_accuracy_reward_telescopes_to_the_log_ratio_of_the_expected_landmar
     unchanged, and over an episode the terms sum to weight x ln(R_first / R_final); a discovery placed less
     certainly than the map so far costs, re-observations pay."""
     weight = 30.0
-    plain = EKFSLAMEnv(max_episode_steps=120, filter=filter_)
-    shaped = EKFSLAMEnv(max_episode_steps=120, filter=filter_, reward={"map_accuracy": weight})
-    plain.reset(seed=5)
-    shaped.reset(seed=5)
-    first = previous = _log_rms_std(shaped)
-    total, terms = 0.0, []
-    for a in _held_actions(2, 120):
-        _, reward_plain, *_ = plain.step(a)
-        _, reward, terminated, truncated, info = shaped.step(a)
-        term = info["reward_terms"]["map_accuracy"]
-        now = _log_rms_std(shaped)
-        if math.isnan(previous):
-            assert term == 0.0
-            first = now
-        else:
-            assert term == pytest.approx(weight * (previous - now), rel=1e-9, abs=1e-12)
-        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
-        previous = now
-        total += term
-        terms.append(term)
-        if terminated or truncated:
-            break
-    assert total == pytest.approx(weight * (first - previous), rel=1e-9, abs=1e-9)
+    terms, _, first, last = _telescoping_term("map_accuracy", weight, _log_rms_std, 120, 5, filter=filter_)
+    assert sum(terms) == pytest.approx(weight * (first - last), rel=1e-9, abs=1e-9)
     assert min(terms) < 0.0 < max(terms)  # both a costly discovery and a paying re-observation happened
 
 
@@ -279,6 +295,13 @@ def _mse(env: EKFSLAMEnv) -> float:
     """The mean squared position error over the slots holding a landmark, from the filter and the truth; NaN if none."""
     errors = _errors(env)
     return float(np.nanmean(errors)) if np.isfinite(errors).any() else math.nan
+
+
+def _mse_is_the_squared_map_rmse(info: dict, now: float, term: float) -> None:
+    if math.isnan(now):
+        assert info["landmarks_seen"] == 0 and term == 0.0
+    else:
+        assert now == pytest.approx(info["map_rmse"] ** 2, rel=1e-9, abs=1e-15)
 
 
 @pytest.mark.parametrize(
@@ -298,40 +321,11 @@ def test_map_error_reward_telescopes_to_the_drop_of_the_true_mean_squared_landma
     (MSE_first - MSE_final), in a macro step too (summed over its inner steps); a discovery placed worse than
     the map so far costs, a correction pays."""
     weight = 5000.0
-    macro = "action" in kwargs
-    steps = 30 if macro else 150
-    plain = EKFSLAMEnv(max_episode_steps=steps, **kwargs)
-    shaped = EKFSLAMEnv(max_episode_steps=steps, reward={"map_error": weight}, **kwargs)
-    plain.reset(seed=seed)
-    shaped.reset(seed=seed)
-    first = previous = _mse(shaped)
-    assert math.isnan(first) == (seed == 3)
-    rng = np.random.default_rng(6)
-    total, terms = 0.0, []
-    for a in _held_actions(2, steps):
-        if macro:
-            a = int(rng.integers(9))
-        _, reward_plain, *_ = plain.step(a)
-        _, reward, terminated, truncated, info = shaped.step(a)
-        term = info["reward_terms"]["map_error"]
-        now = _mse(shaped)
-        if math.isnan(now):
-            assert info["landmarks_seen"] == 0 and term == 0.0
-        else:
-            assert now == pytest.approx(info["map_rmse"] ** 2, rel=1e-9, abs=1e-15)
-        if math.isnan(previous):
-            first = now
-            if not macro:
-                assert term == 0.0
-        elif not macro:
-            assert term == pytest.approx(weight * (previous - now), rel=1e-9, abs=1e-12)
-        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
-        previous = now
-        total += term
-        terms.append(term)
-        if terminated or truncated:
-            break
-    assert total == pytest.approx(weight * (first - previous), rel=1e-9, abs=1e-9)
+    steps = 30 if "action" in kwargs else 150
+    check = _mse_is_the_squared_map_rmse
+    terms, at_reset, first, last = _telescoping_term("map_error", weight, _mse, steps, seed, check, **kwargs)
+    assert math.isnan(at_reset) == (seed == 3)
+    assert sum(terms) == pytest.approx(weight * (first - last), rel=1e-9, abs=1e-9)
     assert min(terms) < 0.0 < max(terms)  # both a costly discovery and a paying correction happened
 
 
