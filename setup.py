@@ -13,10 +13,11 @@ import sys
 import types
 from pathlib import Path
 
-from setuptools import Extension, setup
+from setuptools import Extension, find_packages, setup
 from setuptools.command.build_ext import build_ext
 
-PACKAGE = Path(__file__).resolve().parent / "ekfslam_gym"
+ROOT = Path(__file__).resolve().parent
+PACKAGE = ROOT / "ekfslam_gym"
 AOT = "ekfslam_gym._aot"
 
 
@@ -55,4 +56,19 @@ class BuildKernels(build_ext):
             )
 
 
-setup(ext_modules=[Extension(AOT, sources=[], optional=True)], cmdclass={"build_ext": BuildKernels})
+def _packages() -> tuple[list[str], dict[str, str]]:
+    """The packages and their folders. The repository keeps the agents in its top-level ``agents/`` folder (the
+    project's layout); they install as ``ekfslam_gym.agents``, so a user's own ``agents`` module never clashes."""
+    packages = find_packages(where=str(ROOT), include=["ekfslam_gym", "ekfslam_gym.*"])
+    agents = ["ekfslam_gym.agents"] + [f"ekfslam_gym.agents.{name}" for name in find_packages(str(ROOT / "agents"))]
+    return packages + agents, {"ekfslam_gym.agents": "agents"}
+
+
+PACKAGES, PACKAGE_DIR = _packages()
+
+setup(
+    packages=PACKAGES,
+    package_dir=PACKAGE_DIR,
+    ext_modules=[Extension(AOT, sources=[], optional=True)],
+    cmdclass={"build_ext": BuildKernels},
+)

@@ -1,9 +1,9 @@
-"""Train PPO on an EKFSLAM env from configs/ppo.yaml: the command line of ``agents.training`` (see its docstring).
+"""Train PPO on an EKFSLAM env from configs/ppo.yaml: the command line of ``ekfslam_gym.agents.training`` (see its docstring).
 
     python train.py --config configs/ppo.yaml [--env-id ID] [--timesteps N] [--seed S] [--n-envs K]
                     [--out DIR] [--resume DIR] [--hyperparams KEY=VALUE ...] [--no-progress]
 
-The implementation lives in the installed package (``agents.training``) so that code without this repository's
+The implementation lives in the installed package (``ekfslam_gym.agents.training``) so that code without this repository's
 root on its path (a pip install, the sweep's Ray workers) can train too; this script keeps the old names.
 """
 
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from agents.training import (
+from ekfslam_gym.agents.training import (
     NORMALIZE_DEFAULTS,
     SETTINGS_KEYS,
     SETTINGS_SECTION,

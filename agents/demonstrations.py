@@ -3,12 +3,12 @@
 A policy learns faster when a planner teaches it first (imitation, then RL; issue 8's planner-guided training).
 For the demonstrations to be imitable they must be in the policy's own interface. Two planners act in one:
 
-- ``greedy``: ``GreedyPrimitivesPlanner``, the greedy information-gain planner (``agents.greedy``) choosing, once
+- ``greedy``: ``GreedyPrimitivesPlanner``, the greedy information-gain planner (``ekfslam_gym.agents.greedy``) choosing, once
   per env step of a primitives env (``action.kind: primitives``), the index of the primitive to hold for
   ``action.hold`` control steps, planned from the env's belief exactly as the velocity agent plans;
-- ``frontier``: nearest-frontier exploration in either interface: ``agents.frontier.FrontierWaypointPlanner``
+- ``frontier``: nearest-frontier exploration in either interface: ``ekfslam_gym.agents.frontier.FrontierWaypointPlanner``
   giving, once per env step of a waypoint env (``action.kind: waypoint``), the goal on its path for the env's
-  waypoint controller; ``agents.frontier.FrontierPrimitivesPlanner`` choosing, in a primitives env, the
+  waypoint controller; ``ekfslam_gym.agents.frontier.FrontierPrimitivesPlanner`` choosing, in a primitives env, the
   primitive whose arc ends nearest that goal.
 
 ``collect`` drives the env with one and keeps the env's raw observations (before any VecNormalize), the chosen

@@ -6,7 +6,7 @@ small robot-centred float map, so here: two 3 x 3 convolutions with stride 1 and
 linear layer; every other key (pose, covariances, landmarks, scan, ...) is flattened beside it, as SB3 does.
 
 Use in a config: ``policy: MultiInputPolicy`` and
-``policy_kwargs: {features_extractor_class: agents.extractors.BeliefCNN, features_extractor_kwargs: {cnn_features: 128}}``
+``policy_kwargs: {features_extractor_class: ekfslam_gym.agents.extractors.BeliefCNN, features_extractor_kwargs: {cnn_features: 128}}``
 (``train.py`` resolves the dotted class name).
 """
 

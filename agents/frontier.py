@@ -680,7 +680,7 @@ class FrontierPrimitivesPlanner(FrontierAgent):
     step it returns the index (``np.int64``) of the primitive whose arc, held ``action.hold`` control steps
     from the estimated pose, ends nearest the point of its path ``goal_distance`` m ahead in a free line of
     sight, among the primitives the wall scan and the world's bounds do not rule out (the greedy planner's
-    veto, ``agents.greedy.veto.arc_vetoed``, with ``clearance`` m beyond the robot's radius).
+    veto, ``ekfslam_gym.agents.greedy.veto.arc_vetoed``, with ``clearance`` m beyond the robot's radius).
 
     It drives the frontier agent's path with the greedy planner's primitives, so that a Discrete policy can be
     taught nearest-frontier exploration in the interface the greedy clone acts in. Its step counters advance

@@ -11,7 +11,7 @@ advantages are not those of an untrained critic. Before that, the VecNormalize s
 fitted to the demonstrations (observations, and the discounted returns the reward normaliser divides by), so
 the policy is cloned on the inputs PPO fine-tuning will feed it.
 
-``pretrain(model, env_id, entry, out)`` is what ``agents.training`` runs before ``learn()`` when the config's
+``pretrain(model, env_id, entry, out)`` is what ``ekfslam_gym.agents.training`` runs before ``learn()`` when the config's
 ``train_settings`` hold a ``pretrain`` section (``PRETRAIN_DEFAULTS`` lists its keys); ``validate_pretrain``
 checks that section. torch and stable-baselines3 are imported only when cloning.
 """
@@ -42,7 +42,7 @@ from .demonstrations import (
 from .ppo import is_recurrent
 
 PRETRAIN_DEFAULTS: dict[str, Any] = {
-    "planner": "greedy",  # the demonstrator (agents.demonstrations.PLANNERS)
+    "planner": "greedy",  # the demonstrator (ekfslam_gym.agents.demonstrations.PLANNERS)
     "planner_kwargs": None,  # keyword arguments of the demonstrator, e.g. {relocalize_std: 0.2} for frontier
     "episodes": 200,  # demonstration episodes, one per seed from ``seed``
     "seed": 30000,  # first demonstration seed: a training range, clear of the held-out and evaluation seeds
@@ -55,7 +55,7 @@ PRETRAIN_DEFAULTS: dict[str, Any] = {
     "path": None,  # a demonstrations .npz to reuse instead of collecting (same env id and env_kwargs; a reward may differ)
     "dagger_rounds": 0,  # DAgger rounds after cloning: the clone drives, the planner labels, clone again
     "dagger_episodes": 50,  # episodes per DAgger round, on the seeds after seed + episodes (path: those too)
-    "keep_cloning": None,  # cloning steps kept up during PPO (agents.keep_cloning): {batches, learning_rate, decay}
+    "keep_cloning": None,  # cloning steps kept up during PPO (ekfslam_gym.agents.keep_cloning): {batches, learning_rate, decay}
 }
 KEEP_CLONING_DEFAULTS: dict[str, Any] = {
     "batches": 8,  # minibatches of the demonstrations after each rollout, one Adam step each

@@ -10,7 +10,7 @@ log-likelihood of the planner's action, at the rate ``learning_rate``·``decay``
 head is left to PPO. The Adam optimiser is its own, so its moments are not mixed with PPO's gradients (a resumed
 run starts it afresh).
 
-``pretrain.keep_cloning`` in a training config switches it on (``KEEP_CLONING_DEFAULTS``); ``agents.training``
+``pretrain.keep_cloning`` in a training config switches it on (``KEEP_CLONING_DEFAULTS``); ``ekfslam_gym.agents.training``
 adds ``KeepCloning`` to the run's callbacks. stable-baselines3 and torch are imported with this module.
 """
 

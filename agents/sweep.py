@@ -1,4 +1,4 @@
-"""Training sweeps on Ray Core: one task per (env id, training seed) that trains with ``agents.training`` and
+"""Training sweeps on Ray Core: one task per (env id, training seed) that trains with ``ekfslam_gym.agents.training`` and
 evaluates the final policy on evaluation seeds, each task declaring the one CPU it uses.
 
 A trial's folder ``<out>/<env-id>_seed<S>/`` holds ``train.py``'s usual outputs plus ``result.json`` (the

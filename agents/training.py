@@ -13,12 +13,12 @@ its keyword arguments) and ``env_kwargs``. The settings only this script knows s
 ``eval_freq``/``eval_episodes``/``eval_seed`` (model selection on evaluation seeds, never the held-out suite),
 ``checkpoint_freq`` (total env steps), ``torch_threads``, ``algo`` (rl-zoo3's name of the algorithm: ``ppo``, the
 default, or ``ppo_lstm``, sb3-contrib's RecurrentPPO with ``policy: MlpLstmPolicy`` or ``MultiInputLstmPolicy``;
-``agents.ppo.ALGOS``; rl-zoo3 takes it as ``--algo``) and ``pretrain`` (planner-guided training: a planner's
-demonstrations, greedy's or frontier's, cloned into the policy before PPO, ``agents.imitation``; absent means
+``ekfslam_gym.agents.ppo.ALGOS``; rl-zoo3 takes it as ``--algo``) and ``pretrain`` (planner-guided training: a planner's
+demonstrations, greedy's or frontier's, cloned into the policy before PPO, ``ekfslam_gym.agents.imitation``; absent means
 none, and a resumed run never clones again; either algo; its ``keep_cloning`` keeps cloning steps up between
-PPO's updates, resumed runs included, ``agents.keep_cloning``). ``--hyperparams`` overrides either kind. Class names in
+PPO's updates, resumed runs included, ``ekfslam_gym.agents.keep_cloning``). ``--hyperparams`` overrides either kind. Class names in
 ``policy_kwargs`` (``features_extractor_class``, ``activation_fn``, ``optimizer_class``) may be given dotted,
-e.g. ``agents.extractors.BeliefCNN`` or ``torch.nn.ReLU`` (``nn.ReLU`` too): they are imported when the model
+e.g. ``ekfslam_gym.agents.extractors.BeliefCNN`` or ``torch.nn.ReLU`` (``nn.ReLU`` too): they are imported when the model
 is built, and the record keeps the names. The output folder receives:
 
 - ``model.zip`` + ``model_vecnormalize.pkl``: the final policy and its normalisation statistics;
@@ -120,7 +120,7 @@ def check_algo(entry: dict[str, Any]) -> None:
 
 
 def import_dotted(name: str) -> Any:
-    """The object a dotted name points at (``agents.extractors.BeliefCNN``; ``nn.X`` is ``torch.nn.X``)."""
+    """The object a dotted name points at (``ekfslam_gym.agents.extractors.BeliefCNN``; ``nn.X`` is ``torch.nn.X``)."""
     import importlib
 
     if name.startswith("nn."):
@@ -399,7 +399,7 @@ def train(
         model = algo(
             entry["policy"], train_env, seed=seed, tensorboard_log=str(out / "tb"), verbose=0, **hyper
         )
-        if entry["pretrain"] is not None:  # planner-guided: behaviour cloning before PPO (agents.imitation)
+        if entry["pretrain"] is not None:  # planner-guided: behaviour cloning before PPO (ekfslam_gym.agents.imitation)
             from .imitation import pretrain
 
             report = pretrain(model, env_id, entry, out)["clone"]

@@ -109,7 +109,7 @@ def test_rollouts_are_deterministic(action):
 
 
 def test_primitives_are_the_greedy_planners_and_bad_indices_are_refused():
-    from agents.greedy import DEFAULT_PRIMITIVES
+    from ekfslam_gym.agents.greedy import DEFAULT_PRIMITIVES
 
     assert tuple(DEFAULT_PRIMITIVES) == PRIMITIVES
     env = EKFSLAMEnv(action={"kind": "primitives"})

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import ekfslam_gym  # noqa: F401  (registers the env ids)
-from agents import (
+from ekfslam_gym.agents import (
     AGENTS,
     BASELINES,
     CircleAgent,
@@ -19,9 +19,9 @@ from agents import (
     make_agent,
     wall_scan,
 )
-from agents.greedy import expected_readings, rollout_gain
-from agents.greedy.grid import distance_field, update_walls
-from agents.ppo import model_paths
+from ekfslam_gym.agents.greedy import expected_readings, rollout_gain
+from ekfslam_gym.agents.greedy.grid import distance_field, update_walls
+from ekfslam_gym.agents.ppo import model_paths
 from ekfslam_gym.filter.models import range_bearing
 from tests.agent_runs import agent_actions
 

@@ -60,7 +60,7 @@ def test_nis_matches_the_dense_textbook_form():
 
 def test_default_filter_nis_and_map_nees_sit_in_their_bands_under_random_driving():
     """Seeded (20 runs x 80 steps); the margins allow a few steps outside the 95 % bands."""
-    from agents import make_agent
+    from ekfslam_gym.agents import make_agent
 
     run = run_consistency(
         lambda: gym.make("EKFSLAM-v0", max_episode_steps=80), make_agent("random"), range(20), 80, "random"

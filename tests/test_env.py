@@ -52,7 +52,7 @@ def test_sb3_env_checker(env_id, observation):
 
     sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
     with warnings.catch_warnings():
-        # The belief image is a float image for a custom extractor (agents.extractors.BeliefCNN), not SB3's
+        # The belief image is a float image for a custom extractor (ekfslam_gym.agents.extractors.BeliefCNN), not SB3's
         # uint8 CnnPolicy input: the checker says so in warnings, which are expected.
         warnings.filterwarnings("ignore", message=".*is an image but.*")
         warnings.filterwarnings("ignore", message="The minimal resolution for an image.*")
@@ -495,7 +495,7 @@ def test_observation_layout_is_where_the_spaces_and_the_kernel_put_each_part(obs
 
 
 def test_agents_read_the_scan_through_the_env_layout():
-    from agents.base import wall_scan
+    from ekfslam_gym.agents.base import wall_scan
 
     for observation in ({"coarse_grid": 0, "k_nearest": 2}, {"kind": "dict"}):
         env = EKFSLAMEnv(observation=observation, sensor={"n_beams": 9})
@@ -703,8 +703,8 @@ def test_wheels_filter_takes_the_worlds_wheel_base_and_reads_wheel_odometry():
 def test_greedy_planner_drives_with_every_motion_model(motion_model):
     """The greedy planner rolls the env's filter forward with the primitives' controls in the filter's own
     motion model: every model's controls move the filter along the same arc."""
-    from agents import GreedyInfoGainAgent
-    from agents.greedy import primitive_controls
+    from ekfslam_gym.agents import GreedyInfoGainAgent
+    from ekfslam_gym.agents.greedy import primitive_controls
 
     env = gym.make("EKFSLAM-v0", filter={"motion_model": motion_model}, max_episode_steps=15)
     observation, _ = env.reset(seed=2)

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import ekfslam_gym  # noqa: F401  (registers the env ids)
-from agents import AGENTS, BASELINES, FrontierAgent, make_agent
-from agents.base import wall_scan
-from agents.frontier import (
+from ekfslam_gym.agents import AGENTS, BASELINES, FrontierAgent, make_agent
+from ekfslam_gym.agents.base import wall_scan
+from ekfslam_gym.agents.frontier import (
     FrontierPrimitivesPlanner,
     FrontierWaypointPlanner,
     coverage_and_bounds,
@@ -22,9 +22,9 @@ from agents.frontier import (
     nearest_paths,
     path_sources,
 )
-from agents.greedy.grid import update_walls
-from agents.greedy.rollout import arc_poses
-from agents.greedy.veto import arc_vetoed, scan_geometry, to_world
+from ekfslam_gym.agents.greedy.grid import update_walls
+from ekfslam_gym.agents.greedy.rollout import arc_poses
+from ekfslam_gym.agents.greedy.veto import arc_vetoed, scan_geometry, to_world
 from ekfslam_gym.envs import EKFSLAMEnv
 from ekfslam_gym.envs.actions import PRIMITIVES
 

@@ -11,9 +11,9 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from agents import demonstrations as demo_mod  # noqa: E402
-from agents.demonstrations import Demonstrations, GreedyPrimitivesPlanner, check_seeds, collect  # noqa: E402
-from agents.imitation import (  # noqa: E402
+from ekfslam_gym.agents import demonstrations as demo_mod  # noqa: E402
+from ekfslam_gym.agents.demonstrations import Demonstrations, GreedyPrimitivesPlanner, check_seeds, collect  # noqa: E402
+from ekfslam_gym.agents.imitation import (  # noqa: E402
     BOX_MATCH,
     behaviour_clone,
     discounted_running_returns,
@@ -515,7 +515,7 @@ def test_a_recurrent_config_clones_the_planner_with_a_dagger_round_at_smoke_size
     episodes, drives one DAgger round with its LSTM state, and is saved as a RecurrentPPO clone that evaluates;
     with ``best_epoch``, each cloning records its held-back curve in pretrain.json and keeps its best epoch."""
     import train
-    from agents.ppo import PPOAgent
+    from ekfslam_gym.agents.ppo import PPOAgent
     from ekfslam_gym.evaluation.episodes import evaluate_agent
 
     out = tmp_path / "lstm"
@@ -555,8 +555,8 @@ def test_the_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
     frontier teacher): demonstrations of Dict observations with the belief image are cloned into the
     MultiInputPolicy's BeliefCNN, then PPO starts from the clone."""
     import train
-    from agents import PPOAgent
-    from agents.extractors import BeliefCNN
+    from ekfslam_gym.agents import PPOAgent
+    from ekfslam_gym.agents.extractors import BeliefCNN
 
     entry = train.load_entry(train.Path("configs/ppo_belief_cnn_bc.yaml"), "EKFSLAM-v0")
     assert (
@@ -577,7 +577,7 @@ def test_the_shipped_recipe_clones_the_frontier_planners_primitives_at_smoke_siz
     indices, with Dict observations and the belief image, cloned into the Discrete MultiInputPolicy, then PPO
     starts from the clone."""
     import train
-    from agents import PPOAgent
+    from ekfslam_gym.agents import PPOAgent
 
     config = "configs/ppo_frontier_primitives_bc.yaml"
     entry = train.load_entry(train.Path(config), "EKFSLAM-v0")
@@ -602,7 +602,7 @@ def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
     """configs/ppo_frontier_bc.yaml: the frontier planner's waypoint goals, with Dict observations and the belief
     image, cloned into the Gaussian MultiInputPolicy, then PPO starts from the clone."""
     import train
-    from agents import PPOAgent
+    from ekfslam_gym.agents import PPOAgent
 
     entry = train.load_entry(train.Path("configs/ppo_frontier_bc.yaml"), "EKFSLAM-v0")
     assert entry["pretrain"]["planner"] == "frontier" and entry["env_kwargs"]["action"]["kind"] == "waypoint"
@@ -686,7 +686,7 @@ def test_the_large_mlp_recipes_differ_only_where_named():
     shipped["pretrain"]["planner_kwargs"] = {"relocalize_std": 0.2}
     assert shipped == mlp
     assert cnn["policy"] == "MultiInputPolicy" and mlp["policy"] == "MlpPolicy"
-    assert cnn["policy_kwargs"].pop("features_extractor_class") == "agents.extractors.BeliefCNN"
+    assert cnn["policy_kwargs"].pop("features_extractor_class") == "ekfslam_gym.agents.extractors.BeliefCNN"
     cnn["policy_kwargs"].pop("features_extractor_kwargs")
     assert cnn["env_kwargs"].pop("observation")["belief_image"] is True
     assert cnn["normalize"].pop("norm_obs_keys")
@@ -753,15 +753,15 @@ def test_the_recurrent_belief_cnn_recipe_is_the_shipped_large_one_reading_the_im
     (models/ppo_EKFSLAM-Large-v0.zip's recipe) with the Dict observation's belief image read by BeliefCNN in a
     MultiInputLstmPolicy, and nothing else; at smoke size its demonstrations are cloned into that policy with
     one DAgger round, and PPO starts from the clone."""
-    from agents import PPOAgent
-    from agents.extractors import BeliefCNN
+    from ekfslam_gym.agents import PPOAgent
+    from ekfslam_gym.agents.extractors import BeliefCNN
 
     cnn, shipped = (
         _large_entry("ppo_lstm_belief_cnn_home_keep_pv4_bc"),
         _large_entry("ppo_lstm_primitives_home_keep_pv4_bc"),
     )
     assert cnn["policy"] == "MultiInputLstmPolicy" and shipped["policy"] == "MlpLstmPolicy"
-    assert cnn["policy_kwargs"].pop("features_extractor_class") == "agents.extractors.BeliefCNN"
+    assert cnn["policy_kwargs"].pop("features_extractor_class") == "ekfslam_gym.agents.extractors.BeliefCNN"
     cnn["policy_kwargs"].pop("features_extractor_kwargs")
     assert cnn["env_kwargs"].pop("observation")["belief_image"] is True
     assert "belief_image" not in cnn["normalize"].pop("norm_obs_keys")  # the image is already in [0, 1]

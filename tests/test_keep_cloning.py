@@ -1,4 +1,4 @@
-"""Cloning kept up during PPO fine-tuning (``pretrain.keep_cloning``, agents.keep_cloning): its settings, that its
+"""Cloning kept up during PPO fine-tuning (``pretrain.keep_cloning``, ekfslam_gym.agents.keep_cloning): its settings, that its
 steps move the policy towards the demonstrated actions at the scheduled rate and reproducibly, and that train.py
 runs them between PPO's updates, resumed runs included. Learning quality on the env is never asserted."""
 
@@ -7,7 +7,7 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from agents.imitation import behaviour_clone, fit_normalizer, validate_pretrain  # noqa: E402
+from ekfslam_gym.agents.imitation import behaviour_clone, fit_normalizer, validate_pretrain  # noqa: E402
 from tests.test_imitation import LabelEnv, synthetic  # noqa: E402
 
 
@@ -39,7 +39,7 @@ def _model(seed=0):
 
 
 def _callback(model, demos, **settings):
-    from agents.keep_cloning import KeepCloning
+    from ekfslam_gym.agents.keep_cloning import KeepCloning
 
     callback = KeepCloning(demos, {"batches": 8, "learning_rate": 3.0e-3, "decay": 1.0, **settings},
                            batch_size=128, seed=0)  # fmt: skip
@@ -90,7 +90,7 @@ def test_train_py_keeps_cloning_between_ppo_updates_and_on_resume(tmp_path):
     weights, one with it does not, and its resumed run, which never clones again, still keeps cloning from the
     demonstrations it saved."""
     import train
-    from agents.ppo import PPOAgent
+    from ekfslam_gym.agents.ppo import PPOAgent
 
     def run(out, pretrain):
         train.main(["--config", "configs/ppo_primitives_bc.yaml", "--timesteps", "64", "--out", str(out),

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import ekfslam_gym  # noqa: F401
-from agents import make_agent
+from ekfslam_gym.agents import make_agent
 from ekfslam_gym.cli.smoothing import main
 from ekfslam_gym.evaluation.episodes import EpisodeRecorder, run_episode
 from ekfslam_gym.evaluation.smoothing import compare_with_smoother

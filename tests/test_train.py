@@ -141,10 +141,10 @@ TINY = ["n_steps=64", "batch_size=64", "n_epochs=1", "eval_freq=0", "checkpoint_
 
 
 def test_the_belief_cnn_config_trains_and_evaluates(tmp_path):
-    """configs/ppo_belief_cnn.yaml: MultiInputPolicy over the belief image through agents.extractors.BeliefCNN
+    """configs/ppo_belief_cnn.yaml: MultiInputPolicy over the belief image through ekfslam_gym.agents.extractors.BeliefCNN
     (named by its dotted path in the config), the image left out of VecNormalize."""
-    from agents import PPOAgent
-    from agents.extractors import BeliefCNN
+    from ekfslam_gym.agents import PPOAgent
+    from ekfslam_gym.agents.extractors import BeliefCNN
     from ekfslam_gym.cli import evaluate
 
     out = tmp_path / "cnn"
@@ -156,7 +156,7 @@ def test_the_belief_cnn_config_trains_and_evaluates(tmp_path):
     assert agent.model.observation_space["belief_image"].shape == (3, 16, 16)
     assert "belief_image" not in agent.vecnormalize.obs_rms  # the image is left as it is, in [0, 1]
     record = train.read_run(out)[2]
-    assert record["policy_kwargs"]["features_extractor_class"] == "agents.extractors.BeliefCNN"
+    assert record["policy_kwargs"]["features_extractor_class"] == "ekfslam_gym.agents.extractors.BeliefCNN"
     status = evaluate.main(["--agent", "ppo", "--model", str(out / "model.zip"), "--seeds", "20000",
                             "--max-episode-steps", "4", "--json", "--no-progress"])  # fmt: skip
     assert status == 0
@@ -168,8 +168,8 @@ def test_the_recurrent_config_trains_and_evaluates_with_its_lstm_state(tmp_path)
     pytest.importorskip("sb3_contrib")
     import gymnasium as gym
 
-    from agents import PPOAgent
-    from agents.ppo import saved_algo
+    from ekfslam_gym.agents import PPOAgent
+    from ekfslam_gym.agents.ppo import saved_algo
     from ekfslam_gym.cli import evaluate
 
     out = tmp_path / "lstm"
@@ -216,7 +216,7 @@ def test_the_recurrent_config_trains_and_evaluates_with_its_lstm_state(tmp_path)
 def test_algo_settings_are_checked_and_dotted_classes_resolved(tmp_path):
     import torch
 
-    from agents.extractors import BeliefCNN
+    from ekfslam_gym.agents.extractors import BeliefCNN
 
     config = tmp_path / "c.yaml"
     config.write_text("EKFSLAM-v0: {n_steps: 64}\ntrain_settings: {EKFSLAM-v0: {algo: a2c}}\n")
@@ -224,11 +224,11 @@ def test_algo_settings_are_checked_and_dotted_classes_resolved(tmp_path):
         train.load_entry(config, "EKFSLAM-v0")
     assert train.load_entry(train.Path("configs/ppo.yaml"), "EKFSLAM-v0")["algo"] == "ppo"
     assert train.load_entry(train.Path("configs/ppo_lstm.yaml"), "EKFSLAM-Large-v0")["algo"] == "ppo_lstm"
-    from agents.training import resolve_policy_kwargs
+    from ekfslam_gym.agents.training import resolve_policy_kwargs
 
     resolved = resolve_policy_kwargs(
         {
-            "features_extractor_class": "agents.extractors.BeliefCNN",
+            "features_extractor_class": "ekfslam_gym.agents.extractors.BeliefCNN",
             "activation_fn": "nn.ReLU",
             "net_arch": [8],
         }
@@ -239,4 +239,4 @@ def test_algo_settings_are_checked_and_dotted_classes_resolved(tmp_path):
         "net_arch": [8],
     }
     with pytest.raises(ValueError, match="cannot import"):
-        resolve_policy_kwargs({"features_extractor_class": "agents.extractors.Missing"})
+        resolve_policy_kwargs({"features_extractor_class": "ekfslam_gym.agents.extractors.Missing"})

@@ -71,7 +71,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401  (registers the ids)
-    from agents import AGENTS, make_agent
+    from ekfslam_gym.agents import AGENTS, make_agent
 
     parser = _build_parser()
     args = parser.parse_args(argv)

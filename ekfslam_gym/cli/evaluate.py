@@ -38,7 +38,7 @@ from .common import merge_env_kwargs, parse_seeds
 
 
 def _build_parser() -> argparse.ArgumentParser:
-    from agents import AGENTS
+    from ekfslam_gym.agents import AGENTS
 
     parser = argparse.ArgumentParser(
         prog="python -m ekfslam_gym.evaluate",
@@ -84,7 +84,7 @@ def _build_parser() -> argparse.ArgumentParser:
 
 def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tuple[str, list[Any]]]:
     """(row label, agents whose episodes form that row); several agents in a row only for pooled PPO models."""
-    from agents import AGENTS, BASELINES, make_agent
+    from ekfslam_gym.agents import AGENTS, BASELINES, make_agent
 
     if args.compare:
         names = list(BASELINES) + (["ppo"] if args.model else [])

@@ -18,7 +18,7 @@ def main(argv: list[str] | None = None) -> int:
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401
-    from agents import make_agent
+    from ekfslam_gym.agents import make_agent
 
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter

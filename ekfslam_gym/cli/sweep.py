@@ -8,7 +8,7 @@ Usage::
 Each (env id, seed) trains as ``python train.py --config CONFIG --env-id ID --seed S`` would (into
 ``OUT/<env-id>_seed<S>/``) and its final model is evaluated on ``--eval-seeds`` (default 20000-20009; the
 held-out suite 10000-10049 is refused). Finished trials are skipped, interrupted ones resume (see
-``agents.sweep``). ``OUT/sweep.json`` and ``OUT/sweep.md`` hold, per env id, the IQM with its 95 % bootstrap
+``ekfslam_gym.agents.sweep``). ``OUT/sweep.json`` and ``OUT/sweep.md`` hold, per env id, the IQM with its 95 % bootstrap
 CI of every metric pooled over the seeds' episodes and per seed (``ekfslam_gym.evaluation.aggregate``).
 Progress goes to stderr; with ``--json`` the last line of stdout is the JSON object of ``sweep.json``:
 ``{"env_ids", "seeds", "eval_seeds", "timesteps" (per env id), "wall_seconds", "trained_steps", "steps_per_second",
@@ -95,7 +95,7 @@ def markdown(report: Mapping[str, Any]) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _build_parser()
     args = parser.parse_args(argv)
-    from agents import sweep, training
+    from ekfslam_gym.agents import sweep, training
 
     env_ids = [e.strip() for e in args.env_ids.split(",") if e.strip()]
     if not env_ids:

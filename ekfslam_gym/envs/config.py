@@ -179,7 +179,7 @@ class ObservationConfig:
     estimate and turned with its heading like the coverage window, read from the belief alone: channel 0 the
     coverage memory, 1 the seen landmarks' estimates (each in its cell, weighted by its certainty
     1 / (1 + sqrt(tr Sigma_jj) / cell size)), 2 a memory of where the wall scan has hit a wall (placed at the
-    pose estimate). For a CNN (``agents.extractors.BeliefCNN``); ``ekfslam_gym.envs.observation`` has details.
+    pose estimate). For a CNN (``ekfslam_gym.agents.extractors.BeliefCNN``); ``ekfslam_gym.envs.observation`` has details.
     last_action (``dict`` only, off by default): the Dict observation gains ``last_action``, the action the
     last env step executed (zeros after reset): a float32 one-hot of the primitive in a primitives env, the
     clipped action (velocity or waypoint goal) otherwise. A policy's own commitment (a planner it imitates

@@ -66,7 +66,7 @@ class EKFSLAMEnv(gym.Env):
     cell valued by its certainty 1 / (1 + sqrt(tr Sigma_jj) / cell size); 2 the walls the scan has hit, kept in
     a wall memory (``wall_memory``, laid out like ``coverage_memory``) that every control step marks at the
     scan's endpoints placed from the pose estimate. All of it comes from the belief, never from the true pose,
-    landmarks or walls; ``agents.extractors.BeliefCNN`` reads it (``configs/ppo_belief_cnn.yaml``).
+    landmarks or walls; ``ekfslam_gym.agents.extractors.BeliefCNN`` reads it (``configs/ppo_belief_cnn.yaml``).
     With ``observation.last_action`` (Dict only, off by default) the Dict gains ``last_action``, the action the
     last env step executed, zeros after reset: a float32 one-hot ``Box(0, 1, (K,))`` of the primitive in a
     primitives env, else the clipped action as the action space's Box. It is the policy's own commitment,

@@ -35,7 +35,7 @@ The belief image (``observation.belief_image``, Dict observations only, off by d
 ``belief_image``: float32 (3, S, S) in [0, 1], S = ``belief_size`` (16), a robot-centred window reaching
 ``belief_extent`` m (8) to each side, centred on the pose *estimate* and turned with its heading exactly like
 the coverage window (row 0 furthest to the left, column 0 furthest behind). It is memory and a map for a
-convolutional policy (``agents.extractors.BeliefCNN``), drawn from the belief alone, never from the true pose,
+convolutional policy (``ekfslam_gym.agents.extractors.BeliefCNN``), drawn from the belief alone, never from the true pose,
 landmarks or walls:
 
 ======= ===============================================================================================

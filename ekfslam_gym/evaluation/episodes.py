@@ -297,7 +297,7 @@ def evaluate_agent(
     :func:`export_tum` for every episode.
     """
     if isinstance(agent, str):
-        from agents import make_agent
+        from ekfslam_gym.agents import make_agent
 
         agent = make_agent(agent)
     label = label or getattr(agent, "name", type(agent).__name__)

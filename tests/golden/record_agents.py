@@ -23,7 +23,7 @@ PREVIOUS_FILTER = {"filter": {"motion_model": "odometry", "pose_prior": 1e-6}}
 
 
 def actions(agent_name: str, env_id: str) -> np.ndarray:
-    from agents import make_agent
+    from ekfslam_gym.agents import make_agent
 
     env = gym.make(env_id, **PREVIOUS_FILTER)
     agent = make_agent(agent_name)
