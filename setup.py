@@ -60,7 +60,9 @@ def _packages() -> tuple[list[str], dict[str, str]]:
     """The packages and their folders. The repository keeps the agents in its top-level ``agents/`` folder (the
     project's layout); they install as ``ekfslam_gym.agents``, so a user's own ``agents`` module never clashes."""
     packages = find_packages(where=str(ROOT), include=["ekfslam_gym", "ekfslam_gym.*"])
-    agents = ["ekfslam_gym.agents"] + [f"ekfslam_gym.agents.{name}" for name in find_packages(str(ROOT / "agents"))]
+    agents = ["ekfslam_gym.agents"] + [
+        f"ekfslam_gym.agents.{name}" for name in find_packages(str(ROOT / "agents"))
+    ]
     return packages + agents, {"ekfslam_gym.agents": "agents"}
 
 

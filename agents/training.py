@@ -399,7 +399,9 @@ def train(
         model = algo(
             entry["policy"], train_env, seed=seed, tensorboard_log=str(out / "tb"), verbose=0, **hyper
         )
-        if entry["pretrain"] is not None:  # planner-guided: behaviour cloning before PPO (ekfslam_gym.agents.imitation)
+        if (
+            entry["pretrain"] is not None
+        ):  # planner-guided: behaviour cloning before PPO (ekfslam_gym.agents.imitation)
             from .imitation import pretrain
 
             report = pretrain(model, env_id, entry, out)["clone"]

@@ -21,9 +21,9 @@ import time  # noqa: E402
 
 import gymnasium as gym  # noqa: E402
 import numpy as np  # noqa: E402
+from ekfslam_gym.agents import make_agent  # noqa: E402
 
 import ekfslam_gym  # noqa: E402, F401
-from ekfslam_gym.agents import make_agent  # noqa: E402
 
 
 def run(agent, env, seed: int, steps: int) -> list[float]:

@@ -7,8 +7,6 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-
-import ekfslam_gym  # noqa: F401  (registers the env ids)
 from ekfslam_gym.agents import (
     AGENTS,
     BASELINES,
@@ -22,6 +20,8 @@ from ekfslam_gym.agents import (
 from ekfslam_gym.agents.greedy import expected_readings, rollout_gain
 from ekfslam_gym.agents.greedy.grid import distance_field, update_walls
 from ekfslam_gym.agents.ppo import model_paths
+
+import ekfslam_gym  # noqa: F401  (registers the env ids)
 from ekfslam_gym.filter.models import range_bearing
 from tests.agent_runs import agent_actions
 

@@ -8,8 +8,6 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-
-import ekfslam_gym  # noqa: F401  (registers the env ids)
 from ekfslam_gym.agents import AGENTS, BASELINES, FrontierAgent, make_agent
 from ekfslam_gym.agents.base import wall_scan
 from ekfslam_gym.agents.frontier import (
@@ -25,6 +23,8 @@ from ekfslam_gym.agents.frontier import (
 from ekfslam_gym.agents.greedy.grid import update_walls
 from ekfslam_gym.agents.greedy.rollout import arc_poses
 from ekfslam_gym.agents.greedy.veto import arc_vetoed, scan_geometry, to_world
+
+import ekfslam_gym  # noqa: F401  (registers the env ids)
 from ekfslam_gym.envs import EKFSLAMEnv
 from ekfslam_gym.envs.actions import PRIMITIVES
 

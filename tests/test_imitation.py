@@ -21,6 +21,7 @@ from ekfslam_gym.agents.imitation import (  # noqa: E402
     returns_to_go,
     validate_pretrain,
 )
+
 from ekfslam_gym.envs.actions import PRIMITIVES  # noqa: E402
 
 PRIMITIVE_KWARGS = {"action": {"kind": "primitives", "hold": 10}, "max_episode_steps": 6}
@@ -514,8 +515,9 @@ def test_a_recurrent_config_clones_the_planner_with_a_dagger_round_at_smoke_size
     """configs/ppo_lstm.yaml with a ``pretrain`` section: RecurrentPPO is cloned on the greedy planner's
     episodes, drives one DAgger round with its LSTM state, and is saved as a RecurrentPPO clone that evaluates;
     with ``best_epoch``, each cloning records its held-back curve in pretrain.json and keeps its best epoch."""
-    import train
     from ekfslam_gym.agents.ppo import PPOAgent
+
+    import train
     from ekfslam_gym.evaluation.episodes import evaluate_agent
 
     out = tmp_path / "lstm"
@@ -554,9 +556,10 @@ def test_the_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
     """configs/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe, less its coverage bonus, wider image and
     frontier teacher): demonstrations of Dict observations with the belief image are cloned into the
     MultiInputPolicy's BeliefCNN, then PPO starts from the clone."""
-    import train
     from ekfslam_gym.agents import PPOAgent
     from ekfslam_gym.agents.extractors import BeliefCNN
+
+    import train
 
     entry = train.load_entry(train.Path("configs/ppo_belief_cnn_bc.yaml"), "EKFSLAM-v0")
     assert (
@@ -576,8 +579,9 @@ def test_the_shipped_recipe_clones_the_frontier_planners_primitives_at_smoke_siz
     """configs/ppo_frontier_primitives_bc.yaml (the shipped EKFSLAM-v0 recipe): the frontier planner's primitive
     indices, with Dict observations and the belief image, cloned into the Discrete MultiInputPolicy, then PPO
     starts from the clone."""
-    import train
     from ekfslam_gym.agents import PPOAgent
+
+    import train
 
     config = "configs/ppo_frontier_primitives_bc.yaml"
     entry = train.load_entry(train.Path(config), "EKFSLAM-v0")
@@ -601,8 +605,9 @@ def test_the_shipped_recipe_clones_the_frontier_planners_primitives_at_smoke_siz
 def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
     """configs/ppo_frontier_bc.yaml: the frontier planner's waypoint goals, with Dict observations and the belief
     image, cloned into the Gaussian MultiInputPolicy, then PPO starts from the clone."""
-    import train
     from ekfslam_gym.agents import PPOAgent
+
+    import train
 
     entry = train.load_entry(train.Path("configs/ppo_frontier_bc.yaml"), "EKFSLAM-v0")
     assert entry["pretrain"]["planner"] == "frontier" and entry["env_kwargs"]["action"]["kind"] == "waypoint"

@@ -8,6 +8,7 @@ import pytest
 pytest.importorskip("stable_baselines3")
 
 from ekfslam_gym.agents.imitation import behaviour_clone, fit_normalizer, validate_pretrain  # noqa: E402
+
 from tests.test_imitation import LabelEnv, synthetic  # noqa: E402
 
 
@@ -89,8 +90,9 @@ def test_train_py_keeps_cloning_between_ppo_updates_and_on_resume(tmp_path):
     """With PPO's learning rate 0, PPO cannot move the clone: a run without ``keep_cloning`` ends on the clone's
     weights, one with it does not, and its resumed run, which never clones again, still keeps cloning from the
     demonstrations it saved."""
-    import train
     from ekfslam_gym.agents.ppo import PPOAgent
+
+    import train
 
     def run(out, pretrain):
         train.main(["--config", "configs/ppo_primitives_bc.yaml", "--timesteps", "64", "--out", str(out),

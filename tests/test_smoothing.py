@@ -3,9 +3,9 @@
 import gymnasium as gym
 import numpy as np
 import pytest
+from ekfslam_gym.agents import make_agent
 
 import ekfslam_gym  # noqa: F401
-from ekfslam_gym.agents import make_agent
 from ekfslam_gym.cli.smoothing import main
 from ekfslam_gym.evaluation.episodes import EpisodeRecorder, run_episode
 from ekfslam_gym.evaluation.smoothing import compare_with_smoother

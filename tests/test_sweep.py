@@ -11,6 +11,7 @@ pytest.importorskip("ray")
 pytest.importorskip("stable_baselines3")
 
 from ekfslam_gym.agents import sweep  # noqa: E402
+
 from ekfslam_gym.cli import sweep as cli  # noqa: E402
 
 TINY = ["n_steps=256", "batch_size=256", "n_epochs=1", "n_envs=2", "eval_freq=0", "checkpoint_freq=0",

@@ -145,6 +145,7 @@ def test_the_belief_cnn_config_trains_and_evaluates(tmp_path):
     (named by its dotted path in the config), the image left out of VecNormalize."""
     from ekfslam_gym.agents import PPOAgent
     from ekfslam_gym.agents.extractors import BeliefCNN
+
     from ekfslam_gym.cli import evaluate
 
     out = tmp_path / "cnn"
@@ -167,9 +168,9 @@ def test_the_recurrent_config_trains_and_evaluates_with_its_lstm_state(tmp_path)
     it as such from the record beside the model, carries the LSTM state across steps and resets it at reset."""
     pytest.importorskip("sb3_contrib")
     import gymnasium as gym
-
     from ekfslam_gym.agents import PPOAgent
     from ekfslam_gym.agents.ppo import saved_algo
+
     from ekfslam_gym.cli import evaluate
 
     out = tmp_path / "lstm"
@@ -215,7 +216,6 @@ def test_the_recurrent_config_trains_and_evaluates_with_its_lstm_state(tmp_path)
 
 def test_algo_settings_are_checked_and_dotted_classes_resolved(tmp_path):
     import torch
-
     from ekfslam_gym.agents.extractors import BeliefCNN
 
     config = tmp_path / "c.yaml"

@@ -9,9 +9,9 @@ import math
 
 import numpy as np
 import pytest
+from ekfslam_gym.agents import make_agent
 from scipy.spatial.transform import Rotation
 
-from ekfslam_gym.agents import make_agent
 from ekfslam_gym.angles import wrap_angles
 from ekfslam_gym.cli.evaluate import main as evaluate_main
 from ekfslam_gym.cli.replay import main as replay_main

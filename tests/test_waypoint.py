@@ -7,9 +7,9 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+from ekfslam_gym.agents.base import wall_scan
 
 import ekfslam_gym  # noqa: F401  (registers the env ids)
-from ekfslam_gym.agents.base import wall_scan
 from ekfslam_gym.envs.waypoint import Command, WaypointController, goal_in_world, travel_distance
 
 SCAN_MAX = 5.0
