@@ -248,6 +248,8 @@ def read_gtsam2d(path: str | os.PathLike[str], noise_format: str = "auto") -> Gt
             if lm not in landmark_values:
                 landmark_values[lm] = (xi + rng * math.cos(thi + bearing), yi + rng * math.sin(thi + bearing))
 
+    if not pose_values:
+        raise ValueError(f"{name}: no poses (no VERTEX, ODOMETRY/EDGE, LANDMARK or BR line)")
     pose_ids = np.array(sorted(pose_values), dtype=np.int64)
     landmark_ids = np.array(sorted(landmark_values), dtype=np.int64)
     pose_index = {int(v): k for k, v in enumerate(pose_ids)}
