@@ -167,6 +167,7 @@ def read_gtsam2d(path: str | os.PathLike[str], noise_format: str = "auto") -> Gt
     readings: list[tuple[int, int, int, float, float, float, float]] = []  # line, i, l, r, φ, σr, σφ
     order: list[tuple[str, int]] = []  # ("edge" | "reading", position), in file order
     warned_anisotropic = False
+    noise_cache: dict[tuple[float, ...], Array] = {}  # files tend to repeat one noise line: read each once
 
     with open(path, encoding="utf-8") as stream:
         for line_no, line in enumerate(stream, start=1):
@@ -204,7 +205,10 @@ def read_gtsam2d(path: str | os.PathLike[str], noise_format: str = "auto") -> Gt
             elif tag in _EDGE:
                 if ids[0] == ids[1]:
                     raise fail(f"{tag} from pose {ids[0]} to itself")
-                covariance = _noise_matrix(numbers[3:], noise_format, fail)
+                key = tuple(numbers[3:])
+                if key not in noise_cache:
+                    noise_cache[key] = _noise_matrix(numbers[3:], noise_format, fail)
+                covariance = noise_cache[key]
                 order.append(("edge", len(edges)))
                 edges.append((line_no, ids[0], ids[1], tuple(numbers[:3]), covariance))
             else:
@@ -255,6 +259,8 @@ def read_gtsam2d(path: str | os.PathLike[str], noise_format: str = "auto") -> Gt
     pose_index = {int(v): k for k, v in enumerate(pose_ids)}
     landmark_index = {int(v): k for k, v in enumerate(landmark_ids)}
 
+    sigmas = np.array([r[5:7] for r in readings], dtype=float).reshape(-1, 2)  # σ_range, σ_bearing
+
     def column(rows: list, k: int, dtype: type = float) -> np.ndarray:
         return np.array([row[k] for row in rows], dtype=dtype)
 
@@ -272,8 +278,6 @@ def read_gtsam2d(path: str | os.PathLike[str], noise_format: str = "auto") -> Gt
         reading_pose=np.array([pose_index[r[1]] for r in readings], dtype=np.int64),
         reading_landmark=np.array([landmark_index[r[2]] for r in readings], dtype=np.int64),
         reading=np.array([(r[3], r[4]) for r in readings], dtype=float).reshape(-1, 2),
-        reading_covariance=np.array([np.diag([r[5] ** 2, r[6] ** 2]) for r in readings], dtype=float).reshape(
-            -1, 2, 2
-        ),
+        reading_covariance=np.einsum("ri,ij->rij", sigmas**2, np.eye(2)),
         reading_lines=column(readings, 0, np.int64),
     )
