@@ -458,7 +458,7 @@ def levenberg_marquardt(
             hdata, b, _ = system.linearize(x)
             hdata[gauge] += 1.0
         else:
-            small = abs(err_new - err) <= relative_tolerance * err
+            small = relative_tolerance > 0 and abs(err_new - err) <= relative_tolerance * err
             if np.max(np.abs(dx), initial=0.0) < step_tolerance or small:
                 converged = True  # no descent left at the resolution we care about
                 break
