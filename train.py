@@ -4,7 +4,9 @@
                     [--out DIR] [--resume DIR] [--hyperparams KEY=VALUE ...] [--no-progress]
 
 The implementation lives in the installed package (``ekfslam_gym.agents.training``) so that code without this repository's
-root on its path (a pip install, the sweep's Ray workers) can train too; this script keeps the old names.
+root on its path (a pip install, the sweep's Ray workers) can train too; this script keeps the old names. Run as a
+script, bad input ends in one line on stderr and exit status 2 (``EKFSLAM_DEBUG=1`` for the traceback:
+``ekfslam_gym.cli.common.command_line``); ``main`` imported from here raises as it always did.
 """
 
 from __future__ import annotations
@@ -57,4 +59,6 @@ __all__ = [
 ]
 
 if __name__ == "__main__":
-    main()
+    from ekfslam_gym.cli.common import command_line
+
+    command_line("train")(main)()

@@ -20,14 +20,14 @@ import sys
 from collections.abc import Sequence
 
 from ..evaluation.consistency import QUANTITIES, ConsistencyRun, run_consistency
-from .common import merge_env_kwargs, parse_seeds
+from .common import command_line, command_parser, merge_env_kwargs, parse_seeds
 
 VARIANTS = ("ekf", "fej", "iekf")
 
 
 def _build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    parser = command_parser(
+        "consistency", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument("--agents", default="random,circle", help="comma-separated agent names")
@@ -67,6 +67,7 @@ def plot_runs(runs: list[ConsistencyRun], path: str) -> None:
     plt.close(fig)
 
 
+@command_line("consistency")
 def main(argv: Sequence[str] | None = None) -> int:
     import gymnasium as gym
 

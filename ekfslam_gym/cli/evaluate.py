@@ -34,14 +34,14 @@ from ..evaluation.episodes import (
     evaluate_agent,
 )
 from ..evaluation.report import json_safe, markdown_table, plot_results, text_summary
-from .common import merge_env_kwargs, parse_seeds
+from .common import command_line, command_parser, merge_env_kwargs, parse_seeds
 
 
 def _build_parser() -> argparse.ArgumentParser:
     from ekfslam_gym.agents import AGENTS
 
-    parser = argparse.ArgumentParser(
-        prog="python -m ekfslam_gym.evaluate",
+    parser = command_parser(
+        "evaluate",
         description="Evaluate agents on a seed suite (default: the held-out seeds 10000-10049).",
     )
     parser.add_argument("--agent", default=None,
@@ -121,6 +121,7 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
     return entries
 
 
+@command_line("evaluate")
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _build_parser()
     args = parser.parse_args(argv)

@@ -11,17 +11,18 @@ import sys
 
 from ..evaluation.episodes import EpisodeRecorder, run_episode
 from ..evaluation.smoothing import compare_with_smoother
-from .common import parse_seeds
+from .common import command_line, command_parser, parse_seeds
 
 
+@command_line("smoothing")
 def main(argv: list[str] | None = None) -> int:
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401
     from ekfslam_gym.agents import make_agent
 
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    parser = command_parser(
+        "smoothing", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument("--agent", default="circle")

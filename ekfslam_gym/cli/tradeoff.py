@@ -24,6 +24,7 @@ from ..evaluation.tradeoff import (
     tradeoff_figure,
     write_csv,
 )
+from .common import command_line, command_parser
 
 
 def _reference_line(text: str) -> tuple[float, str]:
@@ -50,11 +51,11 @@ def _load(path: Path, label: str | None, x: str, y: str) -> list[Point]:
     return points_from_episodes(episodes, x, y, label if label is not None else path.stem)
 
 
+@command_line("tradeoff")
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m ekfslam_gym.tradeoff", description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )  # fmt: skip
+    parser = command_parser(
+        "tradeoff", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     metric_names = sorted(BETTER)
     parser.add_argument("files", nargs="+", type=Path, metavar="FILE")
     parser.add_argument(
