@@ -18,7 +18,8 @@ Errors raised below ``main`` are mapped by type (``USER_ERRORS``): ``ValueError`
 errors are ValueErrors: ``unknown config field world.n_landmark; known: [...]``), ``KeyError``, ``OSError``
 (a missing file), ``yaml.YAMLError`` and Gymnasium's ``gymnasium.error.Error`` (an unknown env id) exit 2 with
 their message; any other exception is a bug, reported in one line with exit status 1 and the hint to set
-``EKFSLAM_DEBUG=1``; Ctrl-C exits 130. ``SystemExit`` (argparse's, ``--help``'s) passes through untouched.
+``EKFSLAM_DEBUG=1``; Ctrl-C exits 130. ``SystemExit`` with a status (argparse's, ``--help``'s) passes through
+untouched; ``SystemExit("message")`` is printed as an error and exits 2.
 The wrapper cannot know which flag a deep error came from: checks that can name their flag belong in ``main``
 (``agent_from_flags`` below is one).
 """
@@ -84,11 +85,12 @@ def error_message(error: BaseException) -> str:
     return " ".join(text.split())  # one line
 
 
-def command_line(command: str) -> Callable[[Callable[..., Any]], Callable[..., int]]:
+def command_line(command: str, prog: str | None = None) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Decorate a command's ``main(argv)`` so that bad input ends in one line and exit status 2 (see the module
-    docstring). ``main`` returns its exit status (``None`` or any non-int, e.g. a run folder, counts as 0 when
-    the decorated ``main`` is used as a console script: it returns what ``main`` returns)."""
-    prog = prog_name(command)
+    docstring); the decorated ``main`` returns what ``main`` returns (a console script's should be an exit status
+    or None). The lines start with ``prog`` (default ``ekfslam-<command>``): give the parser's ``prog`` where it
+    differs, so that argparse's own errors and the wrapper's read alike."""
+    prog = prog or prog_name(command)
 
     def decorate(main: Callable[..., Any]) -> Callable[..., int]:
         @functools.wraps(main)
@@ -97,6 +99,11 @@ def command_line(command: str) -> Callable[[Callable[..., Any]], Callable[..., i
                 return main(*args, **kwargs)
             try:
                 return main(*args, **kwargs)
+            except SystemExit as exit:  # sys.exit("message"): a message in place of a status is an error too
+                if isinstance(exit.code, str):
+                    print(f"{prog}: error: {exit.code}", file=sys.stderr)
+                    raise SystemExit(USAGE_EXIT) from None
+                raise
             except KeyboardInterrupt:
                 print(f"{prog}: interrupted", file=sys.stderr)
                 raise SystemExit(INTERRUPTED_EXIT) from None
@@ -135,10 +142,11 @@ def agent_from_flags(
     missing saved model (``--model``)."""
     from ekfslam_gym.agents import AGENTS, make_agent
 
-    if name not in AGENTS:
-        parser.error(f"--agent: unknown agent {name!r}; choose from {sorted(AGENTS)}")
-    parameters = inspect.signature(AGENTS[name]).parameters
-    takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values())
+    # The signature of a registered agent is checked here; any other name is make_agent's to resolve or refuse.
+    parameters = inspect.signature(AGENTS[name]).parameters if name in AGENTS else {}
+    takes_any = name not in AGENTS or any(
+        p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values()
+    )
     allowed = [n for n, p in parameters.items() if p.kind is not inspect.Parameter.VAR_KEYWORD]
     unknown = sorted(set(kwargs) - set(allowed)) if not takes_any else []
     if unknown:
@@ -153,8 +161,8 @@ def agent_from_flags(
         if model is None:
             raise
         parser.error(f"--model {model}: {error_message(error)}")
-    except (TypeError, ValueError) as error:
-        parser.error(f"--agent-kwargs {name}: {error_message(error)}")
+    except (TypeError, ValueError) as error:  # make_agent's ValueError names an unknown agent
+        parser.error(f"{'--agent-kwargs' if kwargs else '--agent'} {name}: {error_message(error)}")
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -188,3 +196,21 @@ def merge_env_kwargs(
         else:
             merged[key] = value
     return merged
+
+
+def check_env_flags(
+    parser: argparse.ArgumentParser, env_id: str, env_kwargs: Mapping[str, Any] | None = None
+) -> None:
+    """Build the env once so that an unknown ``--env-id`` or a setting the config refuses (``--env-kwargs``) is
+    reported against its flag before any episode runs (a build costs a fraction of a second)."""
+    import gymnasium as gym
+
+    import ekfslam_gym  # noqa: F401  (registers the ids)
+
+    try:
+        gym.make(env_id, **(env_kwargs or {})).close()
+    except gym.error.Error as error:
+        known = sorted(k for k in gym.registry if "EKFSLAM" in k)
+        parser.error(f"--env-id {env_id}: {error_message(error)} (this package registers {', '.join(known)})")
+    except (ValueError, TypeError, KeyError, OSError) as error:
+        parser.error(f"--env-kwargs: {error_message(error)}")

@@ -11,29 +11,29 @@ import sys
 
 from ..evaluation.episodes import EpisodeRecorder, run_episode
 from ..evaluation.smoothing import compare_with_smoother
-from .common import command_line, command_parser, parse_seeds
+from .common import agent_from_flags, check_env_flags, command_line, command_parser, parse_seeds
 
 
 @command_line("smoothing")
 def main(argv: list[str] | None = None) -> int:
     import gymnasium as gym
 
-    import ekfslam_gym  # noqa: F401
-    from ekfslam_gym.agents import make_agent
+    import ekfslam_gym  # noqa: F401  (registers the ids)
 
     parser = command_parser(
         "smoothing", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument("--agent", default="circle")
-    parser.add_argument("--seeds", default="10000-10004")
+    parser.add_argument("--seeds", default="10000-10004", type=parse_seeds, help="A-B (inclusive) or A,B,C")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
+    check_env_flags(parser, args.env_id)
     rows = []
-    for seed in parse_seeds(args.seeds):
+    for seed in args.seeds:
         env = gym.make(args.env_id)
         recorder = EpisodeRecorder()
-        run_episode(env, make_agent(args.agent), seed, recording=recorder)
+        run_episode(env, agent_from_flags(parser, args.agent, {}), seed, recording=recorder)
         rows.append({"seed": seed, **compare_with_smoother(recorder, env)})
     if args.json:
         print(json.dumps(rows))
