@@ -1,8 +1,10 @@
 """Reports of an evaluation: JSON-safe values, plain-text and markdown tables, and box plots.
 
-``--json`` output of the evaluate command: one agent gives ``{"agent": str, "episodes": int, "metrics": {name:
+``--format json`` (``--json``) output of the evaluate command: one agent gives ``{"agent": str, "episodes": int, "metrics": {name:
 {"iqm": x, "ci": [lo, hi], "mean": x}}}``; several agents (a comparison) an object keyed by agent name whose
-values are such objects, in the order the agents were given. NaN is written as ``null``.
+values are such objects, in the order the agents were given. NaN is written as ``null``. ``--format blocks`` (the
+default) prints ``text_summary`` per agent, ``--format table`` one ``markdown_table``; both take what
+``aggregate.summary(name, episodes)`` returns (``aggregate`` alone lacks the name and the episode count).
 """
 
 from __future__ import annotations
