@@ -4,6 +4,7 @@ traceback only with EKFSLAM_DEBUG=1); evaluate's single output per run (--format
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import json
 import os
 import subprocess
@@ -236,3 +237,45 @@ def test_evaluate_prints_one_output_per_evaluation(capsys):
     as_json = json.loads(capsys.readouterr().out)
     assert main([*argv, "--json"]) == 0
     assert json.loads(capsys.readouterr().out) == as_json and list(as_json) == ["circle", "random"]
+
+
+# ---------------------------------------------------------------------------------------------- docs page
+@pytest.fixture(scope="module")
+def page_script():
+    spec = importlib.util.spec_from_file_location("command_lines_page", ROOT / "docs" / "command_lines.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_command_lines_page_is_what_the_parsers_give(page_script, capsys):
+    assert page_script.main(["--check"]) == 0, "run: python docs/command_lines.py"
+    text = page_script.PAGE.read_text()
+    for script in SCRIPTS:
+        assert f"\n## {script}\n" in text and f"usage: {script} " in text
+
+
+def test_the_page_check_fails_on_a_stale_page(page_script, tmp_path, monkeypatch, capsys):
+    stale = tmp_path / "command-lines.md"
+    stale.write_text(page_script.PAGE.read_text().replace("--agent-kwargs", "--agent-kwarg"))
+    monkeypatch.setattr(page_script, "PAGE", stale)
+    assert page_script.main(["--check"]) == 1
+    assert "out of date" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "flags, example, message",
+    [
+        (("--agent", "--no-such-flag"), "ekfslam-evaluate --agent circle", "--no-such-flag"),
+        (("--agent",), "ekfslam-evaluate --agent circle --no-such-flag 3", "ekfslam-evaluate"),
+    ],
+)
+def test_a_main_flag_or_an_example_the_parser_refuses_fails_the_page(
+    page_script, monkeypatch, flags, example, message
+):
+    from ekfslam_gym.cli.evaluate import main
+
+    does = page_script.COMMANDS["ekfslam-evaluate"][0]
+    monkeypatch.setitem(page_script.COMMANDS, "ekfslam-evaluate", (does, flags, example))
+    with pytest.raises(ValueError, match=message):
+        page_script.check_example("ekfslam-evaluate", page_script.parser_of(main))
