@@ -42,8 +42,8 @@ def _build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--filters", default="ekf", help=f"comma-separated filter variants ({', '.join(VARIANTS)})"
     )
-    parser.add_argument("--seeds", default="0-49", type=parse_seeds)
-    parser.add_argument("--steps", type=int, default=200)
+    parser.add_argument("--seeds", default="0-49", type=parse_seeds, help="one run per seed: A-B or A,B,C")
+    parser.add_argument("--steps", type=int, default=200, help="control steps per run")
     parser.add_argument("--env-kwargs", type=json_object, default=None, help="config overrides as JSON")
     parser.add_argument("--model", default=None, help="the saved policy, for the ppo agent")
     parser.add_argument("--json", action="store_true", help="one JSON object on the last line of stdout")

@@ -24,11 +24,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = command_parser(
         "smoothing", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--env-id", default="EKFSLAM-v0")
-    parser.add_argument("--agent", default="circle")
+    parser.add_argument("--env-id", default="EKFSLAM-v0", help="the registered env to drive")
+    parser.add_argument("--agent", default="circle", help="the agent that drives every episode")
     parser.add_argument("--seeds", default=span(EVAL_SEEDS[:5]), type=parse_seeds,
                         help="evaluation seeds by default; A-B, A,B,C or a suite's name (heldout, eval)")  # fmt: skip
-    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--json", action="store_true", help="print one JSON list of the per-seed rows")
     args = parser.parse_args(argv)
     check_env_flags(parser, args.env_id)
     rows = []

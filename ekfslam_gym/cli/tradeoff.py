@@ -57,7 +57,8 @@ def main(argv: list[str] | None = None) -> int:
         "tradeoff", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     metric_names = sorted(BETTER)
-    parser.add_argument("files", nargs="+", type=Path, metavar="FILE")
+    parser.add_argument("files", nargs="+", type=Path, metavar="FILE",
+                        help="evaluate --episodes-json files, or CSVs this command wrote")  # fmt: skip
     parser.add_argument(
         "--label", action="append", default=[], help="a group's name, one per JSON file, in order"
     )
@@ -68,7 +69,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--y", default="landmark_rmse", choices=metric_names, metavar="METRIC", help=metric_help
     )
-    parser.add_argument("--plot", type=Path, metavar="FILE.png")
+    parser.add_argument(
+        "--plot", type=Path, metavar="FILE.png", help="draw the points, their CIs and the front"
+    )
     parser.add_argument("--csv", type=Path, metavar="FILE.csv", help="write the points, to redraw them later")
     parser.add_argument("--ci", action="append", default=[], metavar="GROUP", help="draw this group's CIs")
     parser.add_argument(
@@ -79,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
                         help=line_help)  # fmt: skip
     parser.add_argument("--y-line", action="append", default=[], type=_reference_line, metavar="VALUE:TEXT",
                         help=line_help)  # fmt: skip
-    parser.add_argument("--title")
+    parser.add_argument("--title", help="the figure's title")
     args = parser.parse_args(argv)
 
     json_files = [f for f in args.files if not _is_csv(f)]
