@@ -75,12 +75,9 @@ COMMANDS: dict[str, tuple[str, tuple[str, ...], str]] = {
         ("--config", "--env-id", "--timesteps", "--seed", "--hyperparams", "--resume"),
         "ekfslam-train --config configs/ppo.yaml --env-id EKFSLAM-v0 --timesteps 200000 --seed 0",
     ),
-    "train.py": (
-        "Train PPO on an env from a config in rl-zoo3's format.",
-        ("--config", "--env-id", "--timesteps", "--seed", "--hyperparams", "--resume"),
-        "python train.py --config configs/ppo.yaml --env-id EKFSLAM-v0 --timesteps 200000 --seed 0",
-    ),
 }
+_train = COMMANDS["ekfslam-train"]  # the repository's script runs the same command line
+COMMANDS["train.py"] = (*_train[:2], _train[2].replace("ekfslam-train", "python train.py", 1))
 
 
 class _Parsed(BaseException):
