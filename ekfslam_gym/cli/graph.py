@@ -13,7 +13,6 @@ F = Σ eᵀΩe and ``seconds`` times the optimisation alone (reading the file ex
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from collections.abc import Sequence
@@ -23,10 +22,12 @@ from ..data.graph_files import GTSAM_SUFFIXES, read_graph
 from ..evaluation.plotting import plot_graph_solution
 from ..graph.optimizer import GTSAM_LM, optimize
 from ..graph.sparse_solve import BACKENDS
+from .common import command_line, command_parser
 
 
+@command_line("graph")
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m ekfslam_gym.graph", description=__doc__.split("\n\n")[0])
+    parser = command_parser("graph", description=__doc__.split("\n\n")[0])
     parser.add_argument("file", type=Path, help="graph file: .dat (course MAT), .g2o, or GTSAM .txt/.graph")
     parser.add_argument(
         "--solver", choices=("gn", "lm"), default="gn", help="Gauss-Newton or Levenberg-Marquardt"
