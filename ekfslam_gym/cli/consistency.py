@@ -20,9 +20,8 @@ import sys
 from collections.abc import Sequence
 
 from ..evaluation.consistency import QUANTITIES, ConsistencyRun, run_consistency
+from ..filter.settings import VARIANTS
 from .common import merge_env_kwargs, parse_seeds
-
-VARIANTS = ("ekf", "fej", "iekf")
 
 
 def _build_parser() -> argparse.ArgumentParser:

@@ -31,6 +31,7 @@ from ..data.course import read_sensor_data, read_world
 from ..data.synthetic import simulate_drive
 from ..evaluation.replay import ReplayResult, export_tum, replay, summary, true_path_name
 from ..filter import FilterDivergedError
+from ..filter.settings import COURSE_SETTINGS, INIT_MODES
 
 MAX_GIF_FRAMES = 80  # enough for a smooth loop, few enough to render in seconds
 
@@ -85,8 +86,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--sequential", action="store_true", help="one update per reading instead of a batch")
     parser.add_argument(
         "--init",
-        choices=("course", "inverse"),
-        default="course",
+        choices=INIT_MODES,
+        default=COURSE_SETTINGS.init_mode,
         help="landmark initialisation (default course)",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object to stdout, nothing else")
