@@ -49,8 +49,9 @@ def _integer(name: str, value: Any, minimum: int) -> None:
 
 @dataclass(frozen=True)
 class WorldConfig:
-    """The layout generator (``arena``, ``rooms`` or ``loop``), the exact number of landmarks, and keyword
-    arguments passed to the generator (sizes in m, e.g. ``{"width": 20.0}``)."""
+    """The layout generator (``arena``, ``rooms``, ``loop``, or ``surveyed`` with the landmark positions given),
+    the exact number of landmarks, and keyword arguments passed to the generator (sizes in m, e.g.
+    ``{"width": 20.0}``)."""
 
     layout: str = "arena"
     n_landmarks: int = 30
