@@ -18,7 +18,22 @@ from pathlib import Path
 
 import numpy as np
 
-DATASETS = ("course", "mrclam")
+from ..evaluation.report import json_safe
+
+DATASETS = ("course", "mrclam", "gtsam")
+# the first tag of a GTSAM 2-D file (``data.gtsam2d``); the course's files start with a 4-field ODOMETRY line
+_GTSAM_TAGS = (
+    "VERTEX_SE2",
+    "VERTEX2",
+    "VERTEX",
+    "VERTEX_XY",
+    "ODOMETRY",
+    "EDGE_SE2",
+    "EDGE2",
+    "EDGE",
+    "LANDMARK",
+    "BR",
+)
 VARIANTS = ("ekf", "fej", "iekf")
 ASSOCIATIONS = ("known", "nearest", "jcbc")
 NOISES = ("textbook", "fitted")
@@ -30,7 +45,8 @@ def add_real_data_arguments(parser: argparse.ArgumentParser) -> None:
         "--dataset",
         choices=DATASETS,
         default=None,
-        help="the format of --data (default: detected; an MRCLAM folder holds Barcodes.dat)",
+        help="the format of --data (default: detected): course files, an MRCLAM folder (it holds Barcodes.dat) "
+        "or a GTSAM 2-D file such as Victoria Park's",
     )
     parser.add_argument("--variant", choices=VARIANTS, default=None, help="filter variant (real data; ekf)")
     parser.add_argument(
@@ -56,13 +72,9 @@ def add_real_data_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def resolve_dataset(parser: argparse.ArgumentParser, args: argparse.Namespace) -> str:
-    """The data set ``args`` asks for: ``--dataset``, else detected from ``--data``; refuses the real data
-    options elsewhere."""
-    dataset = args.dataset
-    if dataset is None:
-        dataset = (
-            "mrclam" if args.data is not None and (Path(args.data) / "Barcodes.dat").is_file() else "course"
-        )
+    """The data set ``args`` asks for: ``--dataset``, else detected from ``--data`` (and set there); refuses the
+    options that do not apply to it."""
+    dataset = args.dataset = args.dataset if args.dataset is not None else _detect(args.data)
     real_only = {
         "--variant": args.variant is not None,
         "--association": args.association is not None,
@@ -73,10 +85,10 @@ def resolve_dataset(parser: argparse.ArgumentParser, args: argparse.Namespace) -
     if dataset == "course":
         used = [name for name, given in real_only.items() if given]
         if used:
-            parser.error(f"{', '.join(used)} apply to a real data set (--dataset mrclam)")
+            parser.error(f"{', '.join(used)} apply to a real data set (--dataset mrclam or gtsam)")
         return dataset
     if args.data is None:
-        parser.error(f"--dataset {dataset} needs --data (the data set's folder)")
+        parser.error(f"--dataset {dataset} needs --data (the data set's folder or file)")
     course_only = {
         "--world": args.world is not None,
         "--seed": args.seed is not None,
@@ -89,6 +101,13 @@ def resolve_dataset(parser: argparse.ArgumentParser, args: argparse.Namespace) -
     used = [name for name, given in course_only.items() if given]
     if used:
         parser.error(f"{', '.join(used)} do not apply to --dataset {dataset}")
+    if dataset == "gtsam":
+        used = [name for name, given in (("--association", args.association), ("--robots", args.robots),
+                                         ("--noise", args.noise)) if given]  # fmt: skip
+        if used:
+            parser.error(
+                f"{', '.join(used)} apply to --dataset mrclam only (GTSAM files give identities and noise)"
+            )
     if args.smoother and args.association not in (None, "known"):
         parser.error("--smoother uses the barcodes: it needs --association known")
     if args.plot is not None and args.plot.suffix.lower() != ".png":
@@ -96,8 +115,89 @@ def resolve_dataset(parser: argparse.ArgumentParser, args: argparse.Namespace) -
     return dataset
 
 
+def _detect(data: Path | None) -> str:
+    if data is None:
+        return "course"
+    data = Path(data)
+    if (data / "Barcodes.dat").is_file():
+        return "mrclam"
+    if data.is_file():
+        with data.open("r", encoding="ascii", errors="replace") as handle:
+            for line in handle:
+                tokens = line.split()
+                if tokens:
+                    course = tokens[0] in ("ODOMETRY", "SENSOR") and len(tokens) == 4
+                    return "gtsam" if tokens[0] in _GTSAM_TAGS and not course else "course"
+    return "course"
+
+
 def replay_real_data(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
-    """Replay MRCLAM robot 1 and print the report (or one JSON object with ``--json``)."""
+    """Replay a real data set and print the report (or one JSON object with ``--json``)."""
+    if args.dataset == "gtsam":
+        return _replay_gtsam(parser, args)
+    return _replay_mrclam(parser, args)
+
+
+def _replay_gtsam(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """A GTSAM 2-D file's odometry chain and readings through the filter (``evaluation.chain_replay``)."""
+    from ..data.gtsam2d import read_gtsam2d
+    from ..evaluation.chain_replay import replay_chain
+    from ..evaluation.real_data import nis_summary, save_trajectory_picture
+
+    try:
+        dataset = read_gtsam2d(args.data)
+        result = replay_chain(dataset, args.variant or "ekf")
+    except (OSError, ValueError) as error:
+        parser.error(str(error))
+    figures = {
+        "variant": args.variant or "ekf",
+        "steps": result.steps,
+        "landmarks_mapped": int(result.ekf.observed.sum()),
+        "nis": nis_summary(result.nis),
+        "seconds": result.seconds,
+        "microseconds_per_step": 1e6 * result.seconds / max(result.steps, 1),
+    }
+    smoothed = None
+    if args.smoother:
+        from ..graph.optimizer import GTSAM_LM, optimize
+
+        problem = dataset.to_problem()
+        smoothed = optimize(problem.graph, problem.initial, "lm", **GTSAM_LM)
+        gap = np.hypot(*(smoothed.values.poses[:, :2] - result.poses[:, :2]).T)
+        figures["smoother"] = {
+            "chi2": smoothed.final_error,
+            "iterations": smoothed.iterations,
+            "seconds": smoothed.seconds,
+            "trajectory_gap_rms": float(np.sqrt(np.mean(gap**2))),
+            "trajectory_gap_max": float(gap.max()),
+        }
+    if args.plot is not None:
+        save_trajectory_picture(
+            args.plot, result.poses, result.ekf.landmarks[result.ekf.observed],
+            result.ekf.landmark_covs()[result.ekf.observed],
+            smoothed=None if smoothed is None else smoothed.values.poses, title=f"{args.data}: {figures['variant']}",
+        )  # fmt: skip
+    if args.json:
+        print(json.dumps(json_safe(figures), allow_nan=False))
+        return 0
+    nis = figures["nis"]
+    print(
+        f"EKF-SLAM ({figures['variant']}) on {args.data}: {result.steps} steps, "
+        f"{figures['microseconds_per_step']:.0f} us per step, {figures['landmarks_mapped']} landmarks\n"
+        f"NIS: mean {nis['mean']:.2f} over {nis['readings']} re-observations (2 dof: 2), "
+        f"{100 * nis['inside']:.1f} % inside the 95 % band"
+    )
+    if smoothed is not None:
+        s = figures["smoother"]
+        print(
+            f"smoother (LM): chi2 {s['chi2']:.0f}, {s['iterations']} iterations, {s['seconds']:.1f} s; trajectory "
+            f"vs filter {s['trajectory_gap_rms']:.2f} m rms, {s['trajectory_gap_max']:.2f} m max"
+        )
+    return 0
+
+
+def _replay_mrclam(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """Replay MRCLAM robot 1."""
     import dataclasses
 
     from ..data.mrclam import load_mrclam
@@ -146,7 +246,7 @@ def replay_real_data(parser: argparse.ArgumentParser, args: argparse.Namespace) 
             f"MRCLAM robot 1, {settings.variant}, {settings.association} association",
         )  # fmt: skip
     if args.json:
-        print(json.dumps(figures, allow_nan=False))
+        print(json.dumps(json_safe(figures), allow_nan=False))
     else:
         print(_text(figures, args.data))
     return 0

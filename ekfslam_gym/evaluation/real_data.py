@@ -18,7 +18,14 @@ from scipy import stats
 from .alignment import SE2Transform
 from .mrclam import RealReplay, landmark_errors
 
-__all__ = ["nis_band", "nis_summary", "save_map_picture", "save_nis_picture", "summarise"]
+__all__ = [
+    "nis_band",
+    "nis_summary",
+    "save_map_picture",
+    "save_nis_picture",
+    "save_trajectory_picture",
+    "summarise",
+]
 
 
 def nis_band(window: int = 1, dof: int = 2, confidence: float = 0.95) -> tuple[float, float]:
@@ -79,36 +86,67 @@ def save_map_picture(
     smoothed: np.ndarray | None = None,
     title: str = "",
 ) -> Path:
-    """The filter's trajectory and map (3-sigma ellipses), moved onto the survey, with the surveyed landmarks
-    and, if given, the smoother's trajectory (already in the filter's frame)."""
+    """The filter's trajectory and map (3-sigma ellipses, labelled by barcode subject), moved onto the survey,
+    with the surveyed landmarks and, if given, the smoother's trajectory (in the filter's frame)."""
+    slots = np.flatnonzero(result.ekf.observed & (result.labels > 0))
+    return save_trajectory_picture(
+        path,
+        transform.poses(result.poses),
+        transform.points(result.ekf.landmarks[slots]),
+        transform.covariances(result.ekf.landmark_covs()[slots]),
+        labels=result.labels[slots],
+        truth=(truth_ids, truth_xy),
+        smoothed=None if smoothed is None else transform.poses(smoothed),
+        title=title,
+    )
+
+
+def save_trajectory_picture(
+    path: str | os.PathLike[str],
+    poses: np.ndarray,
+    landmarks: np.ndarray,
+    landmark_covs: np.ndarray,
+    *,
+    labels: np.ndarray | None = None,
+    truth: tuple[np.ndarray, np.ndarray] | None = None,
+    smoothed: np.ndarray | None = None,
+    title: str = "",
+    size: tuple[float, float] = (5.2, 7.0),
+) -> Path:
+    """A filter's trajectory (n, 3) and landmarks (m, 2) with 3-sigma ellipses (m, 2, 2); optionally their
+    labels, the surveyed landmarks (ids, (k, 2)) and a smoother's trajectory, all in one frame."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
     from matplotlib.patches import Polygon
 
     from ..ellipses import ellipse_points
 
-    figure = Figure(figsize=(5.2, 7.0), dpi=110)
+    figure = Figure(figsize=size, dpi=110)
     FigureCanvasAgg(figure)
     ax = figure.add_subplot()
-    path_xy = transform.poses(result.poses)
-    ax.plot(*path_xy[:, :2].T, color="tab:red", lw=0.6, alpha=0.7, label="filter trajectory")
+    ax.plot(*poses[:, :2].T, color="tab:red", lw=0.6, alpha=0.7, label="filter trajectory")
     if smoothed is not None:
-        ax.plot(*transform.points(smoothed[:, :2]).T, color="tab:green", lw=0.6, alpha=0.7, label="smoother")
-    ax.plot(*np.asarray(truth_xy).T, "k+", ms=10, mew=2, label="surveyed landmarks")
-    for i, xy in zip(truth_ids, truth_xy, strict=True):
-        ax.annotate(str(int(i)), xy, xytext=(5, -9), textcoords="offset points", fontsize=7)
-    slots = np.flatnonzero(result.ekf.observed & (result.labels > 0))
-    estimates = transform.points(result.ekf.landmarks[slots])
-    covs = transform.covariances(result.ekf.landmark_covs()[slots])
-    ax.plot(*estimates.T, "o", color="tab:blue", ms=3, label="filter landmarks (3 sigma)")
-    for subject, xy in zip(result.labels[slots], estimates, strict=True):  # by barcode: shows a swapped pair
-        ax.annotate(
-            str(int(subject)), xy, xytext=(-12, 4), textcoords="offset points", fontsize=7, color="tab:blue"
-        )
-    for centre, cov in zip(estimates, covs, strict=True):
+        ax.plot(*smoothed[:, :2].T, color="tab:green", lw=0.6, alpha=0.7, label="smoother")
+    if truth is not None:
+        ax.plot(*np.asarray(truth[1]).T, "k+", ms=10, mew=2, label="surveyed landmarks")
+        for i, xy in zip(*truth, strict=True):
+            ax.annotate(str(int(i)), xy, xytext=(5, -9), textcoords="offset points", fontsize=7)
+    ax.plot(
+        *landmarks.T,
+        "o",
+        color="tab:blue",
+        ms=3 if len(landmarks) < 50 else 1.5,
+        label="filter landmarks (3 sigma)",
+    )
+    for centre, cov in zip(landmarks, landmark_covs, strict=True):
         points, valid = ellipse_points(centre, cov, n=48)
         if valid[0]:
             ax.add_patch(Polygon(points[0], closed=True, fill=False, color="tab:blue", lw=0.8))
+    if labels is not None:  # by barcode: shows a swapped pair
+        for label, xy in zip(labels, landmarks, strict=True):
+            ax.annotate(
+                str(int(label)), xy, xytext=(-12, 4), textcoords="offset points", fontsize=7, color="tab:blue"
+            )
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -122,9 +160,14 @@ def save_map_picture(
 
 
 def save_nis_picture(
-    path: str | os.PathLike[str], runs: dict[str, RealReplay], window: int = 50, title: str = ""
+    path: str | os.PathLike[str],
+    runs: dict[str, tuple[np.ndarray, np.ndarray]],
+    window: int = 50,
+    title: str = "",
+    xlabel: str = "time [min]",
 ) -> Path:
-    """Each run's NIS as means of ``window`` consecutive re-observations over time, against the band."""
+    """Each run's NIS ``{label: (times, nis)}`` as means of ``window`` consecutive re-observations, against
+    the band."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -132,14 +175,13 @@ def save_nis_picture(
     FigureCanvasAgg(figure)
     ax = figure.add_subplot()
     lo, hi = nis_band(window)
-    for label, result in runs.items():
-        n = len(result.nis) // window * window
-        means = result.nis[:n].reshape(-1, window).mean(axis=1)
-        times = result.nis_time[:n].reshape(-1, window).mean(axis=1) - result.drive.time[0]
-        ax.plot(times / 60.0, means, lw=1.0, label=label)
+    for label, (times, nis) in runs.items():
+        n = len(nis) // window * window
+        means = nis[:n].reshape(-1, window).mean(axis=1)
+        ax.plot(np.asarray(times)[:n].reshape(-1, window).mean(axis=1), means, lw=1.0, label=label)
     ax.axhspan(lo, hi, color="0.85", label=f"95 % band of a {window}-reading mean")
     ax.axhline(2.0, color="k", lw=0.6, ls=":")
-    ax.set_xlabel("time [min]")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel(f"NIS, mean of {window} readings")
     ax.set_yscale("log")
     ax.grid(True, lw=0.3, alpha=0.5)
