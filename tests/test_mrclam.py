@@ -312,3 +312,14 @@ def test_surveyed_layout_checks_its_landmarks():
         make_layout("surveyed", rng, 3, landmarks=[[1.0, 1.0], [3.0, 2.0]], width=4.0, height=3.0)
     with pytest.raises(ValueError, match="inside the 4.0 x 3.0 m rectangle"):
         make_layout("surveyed", rng, 1, landmarks=[[5.0, 1.0]], width=4.0, height=3.0)
+
+
+def test_anchoring_puts_the_first_pose_at_the_origin():
+    from ekfslam_gym.evaluation.chain_replay import anchored_at_first_pose
+    from ekfslam_gym.graph.se2 import between
+
+    poses = np.array([[3.0, -2.0, 0.7], [4.0, -1.0, 1.2], [2.0, 5.0, -2.5]])
+    moved = anchored_at_first_pose(poses).poses(poses)
+    np.testing.assert_allclose(moved[0], 0.0, atol=1e-12)
+    for k in (1, 2):  # relative poses are unchanged
+        np.testing.assert_allclose(between(moved[0], moved[k]), between(poses[0], poses[k]), atol=1e-12)

@@ -141,7 +141,7 @@ def replay_real_data(parser: argparse.ArgumentParser, args: argparse.Namespace) 
 def _replay_gtsam(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
     """A GTSAM 2-D file's odometry chain and readings through the filter (``evaluation.chain_replay``)."""
     from ..data.gtsam2d import read_gtsam2d
-    from ..evaluation.chain_replay import replay_chain
+    from ..evaluation.chain_replay import anchored_at_first_pose, replay_chain
     from ..evaluation.real_data import nis_summary, save_trajectory_picture
 
     try:
@@ -163,7 +163,8 @@ def _replay_gtsam(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
 
         problem = dataset.to_problem()
         smoothed = optimize(problem.graph, problem.initial, "lm", **GTSAM_LM)
-        gap = np.hypot(*(smoothed.values.poses[:, :2] - result.poses[:, :2]).T)
+        smoothed_poses = anchored_at_first_pose(smoothed.values.poses).poses(smoothed.values.poses)
+        gap = np.hypot(*(smoothed_poses[:, :2] - result.poses[:, :2]).T)
         figures["smoother"] = {
             "chi2": smoothed.final_error,
             "iterations": smoothed.iterations,
@@ -175,7 +176,7 @@ def _replay_gtsam(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         save_trajectory_picture(
             args.plot, result.poses, result.ekf.landmarks[result.ekf.observed],
             result.ekf.landmark_covs()[result.ekf.observed],
-            smoothed=None if smoothed is None else smoothed.values.poses, title=f"{args.data}: {figures['variant']}",
+            smoothed=None if smoothed is None else smoothed_poses, title=f"{args.data}: {figures['variant']}",
         )  # fmt: skip
     if args.json:
         print(json.dumps(json_safe(figures), allow_nan=False))

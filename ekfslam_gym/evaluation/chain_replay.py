@@ -17,9 +17,10 @@ import numpy as np
 
 from ..data.gtsam2d import Gtsam2dDataset
 from ..filter import EKFSLAM
+from .alignment import SE2Transform
 from .innovations import group_innovations
 
-__all__ = ["ChainReplay", "replay_chain"]
+__all__ = ["ChainReplay", "anchored_at_first_pose", "replay_chain"]
 
 
 @dataclass(eq=False)  # holds arrays
@@ -83,3 +84,11 @@ def replay_chain(dataset: Gtsam2dDataset, variant: str = "ekf", landmark_prior: 
         poses[pose] = ekf.pose
     nis = np.concatenate(nis_values) if nis_values else np.zeros(0)
     return ChainReplay(ekf, poses, nis, np.array(nis_poses, dtype=np.int64), seconds)
+
+
+def anchored_at_first_pose(poses: np.ndarray) -> SE2Transform:
+    """The rigid motion that puts ``poses[0]`` at the origin facing x, the filter's start: a smoother whose
+    gauge is free (no prior) is compared with the filter after it."""
+    x, y, theta = poses[0]
+    c, s = math.cos(theta), math.sin(theta)
+    return SE2Transform(-float(theta), -np.array([c * x + s * y, -s * x + c * y]))

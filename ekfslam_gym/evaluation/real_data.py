@@ -186,7 +186,7 @@ def save_nis_picture(
     ax.set_yscale("log")
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=7, loc="lower right", ncol=2)
     figure.subplots_adjust(left=0.11, right=0.98, bottom=0.15, top=0.9)
     path = Path(path)
     figure.savefig(path, format="png")
