@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .course import LandmarkMap
+from .course import LandmarkMap, _float
 
 __all__ = [
     "ROBOT_SUBJECTS",
@@ -132,16 +132,6 @@ def _rows(path: Path, columns: int, what: str) -> Iterator[tuple[str, list[str]]
                     f"{where}: {what} line needs {columns} values, got {len(tokens)}: {line.strip()!r}"
                 )
             yield where, tokens
-
-
-def _float(token: str, what: str, where: str) -> float:
-    try:
-        value = float(token)
-    except ValueError:
-        raise ValueError(f"{where}: {what} {token!r} is not a number") from None
-    if not math.isfinite(value):
-        raise ValueError(f"{where}: {what} {token!r} is not finite")
-    return value
 
 
 def _int(token: str, what: str, where: str) -> int:
