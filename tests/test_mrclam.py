@@ -302,18 +302,6 @@ def test_mrclam_preset_builds_and_steps():
     env.close()
 
 
-def test_surveyed_layout_checks_its_landmarks():
-    from ekfslam_gym.sim.layouts import make_layout
-
-    rng = np.random.default_rng(0)
-    layout = make_layout("surveyed", rng, 2, landmarks=[[1.0, 1.0], [3.0, 2.0]], width=4.0, height=3.0)
-    np.testing.assert_array_equal(layout.landmarks, [[1.0, 1.0], [3.0, 2.0]])
-    with pytest.raises(ValueError, match="n_landmarks is 3 but 2 landmarks"):
-        make_layout("surveyed", rng, 3, landmarks=[[1.0, 1.0], [3.0, 2.0]], width=4.0, height=3.0)
-    with pytest.raises(ValueError, match="inside the 4.0 x 3.0 m rectangle"):
-        make_layout("surveyed", rng, 1, landmarks=[[5.0, 1.0]], width=4.0, height=3.0)
-
-
 def test_anchoring_puts_the_first_pose_at_the_origin():
     from ekfslam_gym.evaluation.chain_replay import anchored_at_first_pose
     from ekfslam_gym.graph.se2 import between
