@@ -236,8 +236,8 @@ def replay_drive(
     covs[:, 0, 0], covs[:, 1, 1] = variances[:, 0], variances[:, 1]
 
     labels = landmark_ids.copy() if known else np.full(n_slots, -1, dtype=np.int64)
-    # unknown association's bookkeeping against the barcodes (tally_associations' arrays, by landmark index)
-    truth_index = slot_of if known else np.where(slot_of >= 0, slot_of, -1)
+    # unknown association's bookkeeping against the barcodes (tally_associations' arrays, by landmark index:
+    # slot_of, -1 for a robot's or an unknown barcode, which counts as clutter)
     slot_truth = np.full(n_slots, -1, dtype=np.int64)
     slot_landmarks = np.zeros((n_slots, 2))
     valid = np.zeros(n_slots, dtype=bool)
@@ -290,7 +290,7 @@ def replay_drive(
                     nis_times.append(np.full(len(nis), drive.time[k + 1]))
                     log_likelihood += log_like
                 f, m, _, _ = tally_associations(
-                    truth_index[subject], z, result.slots, result.new, result.forgotten, ekf.observed,
+                    slot_of[subject], z, result.slots, result.new, result.forgotten, ekf.observed,
                     slot_truth, dummy_truth, slot_landmarks, valid,
                 )  # fmt: skip
                 false += int(f)
