@@ -166,7 +166,7 @@ class EKFSLAMEnv(gym.Env):
     ``EnvConfig``, a path to a YAML file (see ``configs/env/``) or a mapping of sections, and replaces the id's
     preset; ``overrides`` are sections given as keyword arguments, applied on top of it, e.g.
     ``world={"n_landmarks": 50}, reward={"collision": 2.0}``; the filter's odometry model and linearisation
-    are ``filter={"motion_model": "wheels", "variant": "fej"}`` (see ``FilterConfig``). A bad value raises
+    are ``filter={"motion_model": "wheels", "variant": "fej"}`` (see ``ekfslam_gym.filter.FilterSettings``). A bad value raises
     ``ValueError`` naming the field. ``max_episode_steps`` given to ``gym.make`` is ``gym.make``'s own argument (see Episode End); given
     to ``EKFSLAMEnv(...)`` directly it is a config override.
 
@@ -268,10 +268,8 @@ class EKFSLAMEnv(gym.Env):
         self._world = World(layout, cfg.robot, cfg.sensor, cfg.odometry, None, cfg.dt, cfg.substeps)
         f = cfg.filter
         self._ekf = ekf = EKFSLAM(
-            layout.n_landmarks, motion_model=f.motion_model, dt=cfg.dt, measurement_noise=cfg.sensor.cov,
-            landmark_prior=f.landmark_prior, pose_prior=f.pose_prior, init_mode=f.init_mode, update=f.update,
-            initial_pose=layout.start, min_range=max(cfg.sensor.min_range, 1e-3), resync_every=f.resync_every,
-            variant=f.variant, iterations=f.iterations, wheel_base=self._world.wheel_noise.wheel_base,
+            layout.n_landmarks, f, dt=cfg.dt, measurement_noise=cfg.sensor.cov, initial_pose=layout.start,
+            min_range=max(cfg.sensor.min_range, 1e-3), wheel_base=self._world.wheel_noise.wheel_base,
         )  # fmt: skip
         # The world's odometer for the filter's motion model, chosen once per episode rather than every step.
         self._read_odometry = getattr(self._world, ODOMETERS[f.motion_model])
