@@ -650,6 +650,58 @@ def test_two_different_step_limits_are_an_error_and_no_time_limit_leaves_the_env
     assert run_to_truncation(direct, 20)[1] == [False] * 8 + [True]
 
 
+@pytest.mark.parametrize(
+    "env_id, action, limit",
+    [
+        ("EKFSLAM-v0", {"kind": "primitives"}, 50),
+        ("EKFSLAM-Loop-v0", {"kind": "waypoint"}, 80),
+        ("EKFSLAM-v0", {"kind": "velocity", "hold": 4}, 125),
+        ("EKFSLAM-v0", {"kind": "primitives", "hold": 1}, 500),
+    ],
+)
+def test_macro_actions_keep_the_registered_episode_time_and_report_their_hold(env_id, action, limit):
+    env = gym.make(env_id, action=action)
+    cfg = env.unwrapped.config
+    assert cfg.action.hold == action.get("hold", 10)  # the effective hold, never None
+    assert env.spec.max_episode_steps == cfg.max_episode_steps == limit
+    assert time_limits(env) == [limit]
+    assert limit * cfg.action.hold == gym.spec(env_id).max_episode_steps  # the same simulated time
+    rebuilt = gym.make(env.spec)
+    assert rebuilt.spec.max_episode_steps == rebuilt.unwrapped.config.max_episode_steps == limit
+
+
+def test_a_primitives_episode_truncates_after_the_registered_time():
+    env = gym.make("EKFSLAM-v0", action={"kind": "primitives"})
+    obs, _ = env.reset(seed=0)
+    for step in range(1, 51):
+        obs, _, terminated, truncated, info = env.step(7)  # turning in place: nothing ends the episode
+        assert not terminated and truncated == (step == 50)
+    assert info["step"] == 500 and time_left(env, obs) == 0.0
+
+
+def test_a_given_step_limit_is_kept_for_macro_actions_and_an_inexact_division_warns():
+    for kwargs in (
+        {"max_episode_steps": 7},
+        {"config": {"max_episode_steps": 7, "action": {"kind": "primitives"}}},
+    ):
+        env = gym.make("EKFSLAM-v0", **{"action": {"kind": "primitives"}, **kwargs})
+        assert env.spec.max_episode_steps == env.unwrapped.config.max_episode_steps == 7
+    with pytest.warns(UserWarning, match="does not divide"):
+        env = gym.make("EKFSLAM-Large-v0", action={"kind": "primitives", "hold": 3})
+    assert env.spec.max_episode_steps == env.unwrapped.config.max_episode_steps == 334
+
+
+def test_a_change_of_action_kind_takes_the_new_kinds_default_hold():
+    assert EnvConfig().action.hold == 1
+    assert EnvConfig.from_overrides(action={"kind": "primitives"}).action.hold == 10
+    three = EnvConfig.from_overrides(action={"kind": "primitives", "hold": 3})
+    assert EnvConfig.from_overrides(three, action={"guard": 0.2}).action.hold == 3  # kind unchanged: kept
+    assert EnvConfig.from_overrides(three, action={"kind": "primitives"}).action.hold == 3
+    assert EnvConfig.from_overrides(three, action={"kind": "waypoint"}).action.hold == 10
+    assert EnvConfig.from_overrides(three, action={"kind": "velocity"}).action.hold == 1
+    assert EnvConfig.from_overrides(**three.to_dict()) == three  # a written record reads back
+
+
 FILTER_SETTINGS = [
     {"variant": "ekf"},
     {"variant": "fej"},

@@ -142,7 +142,7 @@ class EKFSLAMEnv(gym.Env):
         self._layout = ObservationLayout.from_config(config.observation, config.sensor)
         self._interface = make_interface(config)
         self.action_space = self._interface.space
-        self._hold = config.action.steps
+        self._hold = config.action.hold
         # Macro actions (primitives, waypoint, a held velocity) report their control steps in info.
         self._macro = config.action.kind != "velocity" or self._hold > 1
         self.observation_space = observation_space(self._layout, config.observation, self.action_space)
