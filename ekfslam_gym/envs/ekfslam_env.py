@@ -235,8 +235,8 @@ class EKFSLAMEnv(gym.Env):
         self._odometry = np.zeros(2 if f.motion_model == "velocity" else 3)
         self._odometry_cov = np.zeros((self._odometry.size, self._odometry.size))
         read = self._filter_update(None, self._world.sense(rng))
-        self._belief = self._belief_views()
-        self._telescoped = Telescoped.of(ekf.log_det, self._belief[1])
+        self._take_views()
+        self._telescoped = Telescoped.of(ekf.log_det, self._cov_diagonal)
         self._mark_and_trail()
         if self._belief_image:
             self._mark_walls()
@@ -321,9 +321,8 @@ class EKFSLAMEnv(gym.Env):
         metrics = self._step_metrics(read)
         self._loop_closures += metrics.loop_closures
         self._worst_variance = metrics.worst_variance
-        cov = self._belief[1]
-        before, self._telescoped = self._telescoped, Telescoped.of(self._ekf.log_det, cov)
-        terms = rewards.evaluate(StepContext(before, self._telescoped, cov[:3, :3], collided, covered))
+        before, self._telescoped = self._telescoped, Telescoped.of(self._ekf.log_det, self._cov_diagonal)
+        terms = rewards.evaluate(StepContext(before, self._telescoped, self._pose_cov, collided, covered))
         reward = rewards.weigh(terms, self._weights)
         return ControlStep(terms, reward, metrics, collided, self._is_terminated(), False)
 
@@ -436,22 +435,26 @@ class EKFSLAMEnv(gym.Env):
         }
 
     # ------------------------------------------------------------------ pieces
-    def _belief_views(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The filter's (mean, cov, observed, pose_cov_given_map): its public read-only views, fetched once per
-        episode rather than at every step. They stay current because the filter updates its arrays in place."""
+    def _take_views(self) -> None:
+        """Fetch the filter's public read-only views once per episode rather than at every step: ``_belief``
+        (mean, cov, observed, pose_cov_given_map), the pose block and the diagonal of cov. They stay current
+        because the filter updates its arrays in place."""
         ekf = self._ekf
-        return ekf.mean, ekf.cov, ekf.observed, ekf.pose_cov_given_map
+        self._belief = (ekf.mean, ekf.cov, ekf.observed, ekf.pose_cov_given_map)
+        self._pose_cov = ekf.pose_cov
+        self._cov_diagonal = np.diagonal(self._belief[1])
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        state["_belief"] = None  # views: a pickle would copy them apart from the filter; rebuilt on load
+        for views in ("_belief", "_pose_cov", "_cov_diagonal"):
+            state[views] = None  # a pickle would copy them apart from the filter; taken anew on load
         state.pop("_read_odometry", None)  # a bound method of the world: rebound on load
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         if self._ekf is not None:
-            self._belief = self._belief_views()
+            self._take_views()
             self._read_odometry = getattr(self._world, ODOMETERS[self.config.filter.motion_model])
 
     def _mark_and_trail(self) -> int:

@@ -30,8 +30,9 @@ class Telescoped(NamedTuple):
     ln_trace: float
 
     @classmethod
-    def of(cls, log_det: float, cov: np.ndarray) -> Telescoped:
-        return cls(log_det, math.log(float(np.trace(cov))))
+    def of(cls, log_det: float, cov_diagonal: np.ndarray) -> Telescoped:
+        """From log det Sigma and the diagonal of Sigma (a view, which sums faster than ``np.trace``)."""
+        return cls(log_det, math.log(float(cov_diagonal.sum())))
 
 
 class StepContext(NamedTuple):
