@@ -23,7 +23,7 @@ KINDS = [
 
 
 # Every optional reward term on.
-SHAPED = {"a_opt": 0.3, "step_cost": 0.05, "pose_variance": 7.0, "coverage": 1.0}
+SHAPED = {"step_cost": 0.05, "pose_variance": 7.0, "coverage": 1.0}
 
 
 def _actions(env: gym.Env, n: int, seed: int) -> list:

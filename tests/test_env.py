@@ -107,7 +107,7 @@ def test_pickle_mid_episode_continues_identically():
 
 
 def test_reward_is_the_sum_of_its_terms_and_information_gain_telescopes():
-    weights = {"collision": 0.5, "step_cost": 0.1, "a_opt": 0.3}
+    weights = {"collision": 0.5, "step_cost": 0.1, "pose_variance": 0.3}
     env = EKFSLAMEnv(reward=weights)
     _, info = env.reset(seed=2)
     log_det_0 = info["log_det"]
@@ -525,13 +525,13 @@ def test_one_list_of_reward_terms_makes_the_config_fields_and_the_info():
     assert tuple(f.name for f in dataclasses.fields(RewardConfig)) == REWARD_NAMES
     assert all(getattr(RewardConfig(), t.name) == t.default for t in REWARD_TERMS)
     # Every term, unweighted, in the list's order, whatever its weight; the reward weighs them.
-    env = EKFSLAMEnv(reward={"info_gain": 0.0, "step_cost": 0.25, "a_opt": 0.5})
+    env = EKFSLAMEnv(reward={"info_gain": 0.0, "step_cost": 0.25, "pose_variance": 0.5})
     env.reset(seed=0)
     _, reward, *_, info = env.step(np.array([0.3, 0.1]))
     terms = info["reward_terms"]
     assert list(terms) == list(REWARD_NAMES)
     assert terms["step_cost"] == -1.0 and terms["info_gain"] != 0.0
-    assert reward == 0.5 * terms["a_opt"] + terms["collision"] + 0.25 * terms["step_cost"]
+    assert reward == terms["collision"] + 0.25 * terms["step_cost"] + 0.5 * terms["pose_variance"]
     assert pickle.loads(pickle.dumps(RewardConfig(collision=3.0))) == RewardConfig(collision=3.0)
 
 

@@ -149,7 +149,6 @@ class RewardConfig:
     whatever its weight. The fields are REWARD_TERMS' names and defaults, in its order (a test holds them so)."""
 
     info_gain: float = 1.0
-    a_opt: float = 0.0
     collision: float = 1.0
     step_cost: float = 0.0
     coverage: float = 0.0

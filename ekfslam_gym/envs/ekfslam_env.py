@@ -236,7 +236,7 @@ class EKFSLAMEnv(gym.Env):
         self._odometry_cov = np.zeros((self._odometry.size, self._odometry.size))
         read = self._filter_update(None, self._world.sense(rng))
         self._take_views()
-        self._telescoped = Telescoped.of(ekf.log_det, self._cov_diagonal)
+        self._telescoped = Telescoped(ekf.log_det)
         self._mark_and_trail()
         if self._belief_image:
             self._mark_walls()
@@ -321,7 +321,7 @@ class EKFSLAMEnv(gym.Env):
         metrics = self._step_metrics(read)
         self._loop_closures += metrics.loop_closures
         self._worst_variance = metrics.worst_variance
-        before, self._telescoped = self._telescoped, Telescoped.of(self._ekf.log_det, self._cov_diagonal)
+        before, self._telescoped = self._telescoped, Telescoped(self._ekf.log_det)
         terms = rewards.evaluate(StepContext(before, self._telescoped, self._pose_cov, collided, covered))
         reward = rewards.weigh(terms, self._weights)
         return ControlStep(terms, reward, metrics, collided, self._is_terminated(), False)
@@ -437,16 +437,15 @@ class EKFSLAMEnv(gym.Env):
     # ------------------------------------------------------------------ pieces
     def _take_views(self) -> None:
         """Fetch the filter's public read-only views once per episode rather than at every step: ``_belief``
-        (mean, cov, observed, pose_cov_given_map), the pose block and the diagonal of cov. They stay current
-        because the filter updates its arrays in place."""
+        (mean, cov, observed, pose_cov_given_map) and the pose block of cov. They stay current because the
+        filter updates its arrays in place."""
         ekf = self._ekf
         self._belief = (ekf.mean, ekf.cov, ekf.observed, ekf.pose_cov_given_map)
         self._pose_cov = ekf.pose_cov
-        self._cov_diagonal = np.diagonal(self._belief[1])
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        for views in ("_belief", "_pose_cov", "_cov_diagonal"):
+        for views in ("_belief", "_pose_cov"):
             state[views] = None  # a pickle would copy them apart from the filter; taken anew on load
         state.pop("_read_odometry", None)  # a bound method of the world: rebound on load
         return state

@@ -5,15 +5,14 @@
 recorded steps can be re-weighted later. The reward is the weighted sum, taken in one place (``weigh``), over
 the terms whose weight is non-zero. A new term is one function and one entry here.
 
-The information terms are the optimality criteria of experimental design applied to the SLAM covariance
-(D-optimality, ``info_gain``; A-optimality, ``a_opt``; see the README's *The maths, briefly*, and Carrillo,
-Reid & Castellanos, "On the comparison of uncertainty criteria for active SLAM", ICRA 2012). Both telescope:
-they are differences of one quantity from one control step to the next, which ``Telescoped`` holds.
+The information gain is the D-optimality criterion of experimental design applied to the SLAM covariance (see
+the README's *The maths, briefly*, and Carrillo, Reid & Castellanos, "On the comparison of uncertainty criteria
+for active SLAM", ICRA 2012). It telescopes: it is the difference of one quantity from one control step to the
+next, which ``Telescoped`` holds.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -22,17 +21,11 @@ import numpy as np
 
 
 class Telescoped(NamedTuple):
-    """The quantities the telescoping terms difference, as of one control step (or reset): log det Sigma and
-    ln trace Sigma of the filter's full covariance. Set at reset whatever the weights, so every term is
-    reported from the first step on."""
+    """The quantities the telescoping terms difference, as of one control step (or reset): log det Sigma of the
+    filter's full covariance. Set at reset whatever the weights, so every term is reported from the first step
+    on."""
 
     log_det: float
-    ln_trace: float
-
-    @classmethod
-    def of(cls, log_det: float, cov_diagonal: np.ndarray) -> Telescoped:
-        """From log det Sigma and the diagonal of Sigma (a view, which sums faster than ``np.trace``)."""
-        return cls(log_det, math.log(float(cov_diagonal.sum())))
 
 
 class StepContext(NamedTuple):
@@ -47,10 +40,6 @@ class StepContext(NamedTuple):
 
 def info_gain(c: StepContext) -> float:
     return c.before.log_det - c.after.log_det
-
-
-def a_opt(c: StepContext) -> float:
-    return c.before.ln_trace - c.after.ln_trace
 
 
 def collision(c: StepContext) -> float:
@@ -87,14 +76,6 @@ REWARD_TERMS: tuple[RewardTerm, ...] = (
         "log det Sigma_{t-1} - log det Sigma_t, nats: the D-optimal information gain, the default reward; "
         "telescopes to log det Sigma_0 - log det Sigma_T",
         info_gain,
-    ),
-    RewardTerm(
-        "a_opt",
-        0.0,
-        "ln trace Sigma_{t-1} - ln trace Sigma_t: the A-optimal gain, which weighs the summed variances rather "
-        "than the volume of the uncertainty, so one very uncertain landmark counts for more; for comparing "
-        "uncertainty criteria (Carrillo et al. 2012); telescopes",
-        a_opt,
     ),
     RewardTerm("collision", 1.0, "-1 per control step in contact with a wall", collision),
     RewardTerm(
