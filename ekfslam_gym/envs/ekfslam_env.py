@@ -81,7 +81,7 @@ class EKFSLAMEnv(gym.Env):
     remains unknown: a landmark first read at r m pays about 23.3 - 2 ln r nats (unseen ones are carried at
     ``filter.landmark_prior``), re-observing pays ever less, and closing a loop pays the correlations it removes.
     Every prediction adds odometry noise, so standing still costs a little; the first control step costs about
-    8 to 16 nats even standing still, because the pose starts known to ``filter.pose_prior`` (1e-10) and the
+    8 to 20 nats, even standing still, because the pose starts known to ``filter.pose_prior`` (1e-10) and the
     first odometry noise is orders of magnitude larger (``docs/belief-and-truth.md``, *The first step's
     reward*). A macro step's reward is the sum of its control steps'.
 
