@@ -148,11 +148,11 @@ class RewardConfig:
     reward is the sum of the terms times their weights; ``info["reward_terms"]`` reports every term unweighted,
     whatever its weight. The fields are REWARD_TERMS' names and defaults, in its order (a test holds them so)."""
 
-    info_gain: float = 1.0
-    collision: float = 1.0
-    step_cost: float = 0.0
-    coverage: float = 0.0
-    pose_variance: float = 0.0
+    info_gain: float = 1.0  # per nat of log det Sigma dropped
+    collision: float = 1.0  # per control step in contact with a wall
+    step_cost: float = 0.0  # per control step
+    coverage: float = 0.0  # per m^2 looked at for the first time
+    pose_variance: float = 0.0  # per m^2 of the pose estimate's position variance, each control step
 
     def __post_init__(self) -> None:
         for term in REWARD_TERMS:
