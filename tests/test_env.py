@@ -200,6 +200,37 @@ def test_yaml_configs_match_the_registered_presets():
     assert EKFSLAMEnv(config=root / "loop.yaml").config.world.layout == "loop"
 
 
+def test_config_merges_onto_the_ids_preset_and_replacing_it_is_asked_for(tmp_path):
+    """``config=`` (a mapping or a YAML file) changes the id's preset where it says, and nothing else; only
+    ``preset=None`` starts from the defaults (and then the defaults' step limit is the TimeLimit's)."""
+    large = EnvConfig.from_overrides(**PRESETS["EKFSLAM-Large-v0"])
+    expected = EnvConfig.from_overrides(large, world={"n_landmarks": 40})
+    yaml_file = tmp_path / "forty.yaml"
+    yaml_file.write_text("world:\n  n_landmarks: 40\n")
+    for config in ({"world": {"n_landmarks": 40}}, yaml_file, str(yaml_file)):
+        env = gym.make("EKFSLAM-Large-v0", config=config)
+        assert env.unwrapped.config == expected
+        assert env.spec.max_episode_steps == 1000
+    assert expected.world.layout == "rooms" and expected.world.layout_kwargs["width"] == 40.0
+    loop = gym.make("EKFSLAM-Loop-v0", config={"max_episode_steps": 900}, sensor={"max_range": 4.0})
+    assert loop.unwrapped.config == EnvConfig.from_overrides(
+        EnvConfig.from_overrides(**PRESETS["EKFSLAM-Loop-v0"]),
+        max_episode_steps=900,
+        sensor={"max_range": 4.0},
+    )
+    assert loop.spec.max_episode_steps == 900
+
+    replaced = gym.make("EKFSLAM-Large-v0", config={"world": {"n_landmarks": 40}}, preset=None)
+    assert replaced.unwrapped.config == EnvConfig.from_overrides(world={"n_landmarks": 40})
+    assert replaced.spec.max_episode_steps == 500
+    complete = EnvConfig.from_overrides(world={"n_landmarks": 12})  # a whole EnvConfig is used as it is
+    assert gym.make("EKFSLAM-Large-v0", config=complete).unwrapped.config == complete
+    assert EKFSLAMEnv(preset="EKFSLAM-Large-v0").config == large
+    assert EKFSLAMEnv().config == EnvConfig()
+    with pytest.raises(ValueError, match=r"unknown preset 'EKFSLAM-Huge-v0'; known: \['EKFSLAM-Large-v0'"):
+        EKFSLAMEnv(preset="EKFSLAM-Huge-v0")
+
+
 def test_large_variant_has_at_least_100_landmarks_and_truncates_at_its_own_limit():
     env = gym.make("EKFSLAM-Large-v0")
     env.reset(seed=0)

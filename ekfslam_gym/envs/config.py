@@ -22,6 +22,7 @@ from ..filter.settings import FilterSettings
 from ..sim.odometry import OdometryNoise
 from ..sim.robot import RobotParams
 from ..sim.sensor import SensorParams
+from .presets import PRESETS
 from .rewards import REWARD_TERMS
 
 
@@ -244,8 +245,9 @@ class EnvConfig:
         return _replace(base if base is not None else cls(), overrides, "")
 
     @classmethod
-    def from_yaml(cls, path: str | Path, **overrides: Any) -> EnvConfig:
-        """Load a YAML file of (possibly partial) sections, then apply ``overrides`` on top."""
+    def from_yaml(cls, path: str | Path, base: EnvConfig | None = None, **overrides: Any) -> EnvConfig:
+        """Load a YAML file of (possibly partial) sections onto ``base`` (default: the defaults), then apply
+        ``overrides`` on top."""
         import yaml
 
         path = Path(path)
@@ -255,7 +257,7 @@ class EnvConfig:
         if not isinstance(data, Mapping):
             raise ValueError(f"{path}: the top level must be a mapping of config sections")
         try:
-            config = cls.from_overrides(**data)
+            config = cls.from_overrides(base, **data)
         except ValueError as error:
             raise ValueError(f"{path}: {error}") from None
         return cls.from_overrides(config, **overrides)
@@ -263,6 +265,28 @@ class EnvConfig:
     def to_dict(self) -> dict[str, Any]:
         """A plain nested dict (YAML- and JSON-friendly) that ``from_overrides(**d)`` turns back into this."""
         return dataclasses.asdict(self)
+
+
+def build_config(
+    config: EnvConfig | str | Path | Mapping[str, Any] | None,
+    preset: str | None,
+    overrides: Mapping[str, Any],
+) -> EnvConfig:
+    """The env's configuration: a mapping of sections or a YAML file of them merged onto ``preset``'s (a
+    registered id, ``ekfslam_gym.envs.presets``; None: the defaults), or a complete ``EnvConfig`` as it is;
+    then ``overrides`` on top."""
+    if preset is not None and preset not in PRESETS:
+        raise ValueError(f"unknown preset {preset!r}; known: {sorted(PRESETS)} or None (the defaults)")
+    if isinstance(config, EnvConfig):
+        return EnvConfig.from_overrides(config, **overrides)
+    base = EnvConfig.from_overrides(**PRESETS[preset]) if preset is not None else EnvConfig()
+    if isinstance(config, (str, Path)):
+        return EnvConfig.from_yaml(config, base, **overrides)
+    if isinstance(config, Mapping):
+        return EnvConfig.from_overrides(EnvConfig.from_overrides(base, **config), **overrides)
+    if config is None:
+        return EnvConfig.from_overrides(base, **overrides)
+    raise TypeError(f"config must be an EnvConfig, a YAML path or a mapping, got {type(config).__name__}")
 
 
 def _replace(obj: Any, overrides: Mapping[str, Any], prefix: str) -> Any:

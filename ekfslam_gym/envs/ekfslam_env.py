@@ -17,7 +17,7 @@ from ..sim.sensor import Readings
 from ..sim.world import World
 from . import rewards
 from .actions import make_interface
-from .config import EnvConfig
+from .config import EnvConfig, build_config
 from .observation import ObservationLayout, make_memory, observation_constants, observation_space
 from .rewards import StepContext, Telescoped
 
@@ -99,11 +99,14 @@ class EKFSLAMEnv(gym.Env):
     gives N.
 
     ## Arguments
-    ``gymnasium.make("EKFSLAM-v0", config=None, render_mode=None, **overrides)``: ``config`` is an ``EnvConfig``,
-    a path to a YAML file (``configs/env/``) or a mapping of sections, and replaces the id's preset;
-    ``overrides`` are sections applied on top of it, e.g. ``world={"n_landmarks": 50}, reward={"collision":
-    2.0}, filter={"motion_model": "odometry"}`` (``ekfslam_gym.filter.FilterSettings``). A bad value raises ``ValueError`` naming the field.
-    ``render_mode``: ``rgb_array`` or ``human``.
+    ``gymnasium.make("EKFSLAM-v0", config=None, render_mode=None, **overrides)``: ``config`` is a mapping of
+    sections or a path to a YAML file of them (``configs/env/``), merged onto the id's preset
+    (``gym.make("EKFSLAM-Large-v0", config={"world": {"n_landmarks": 40}})`` keeps the Large rooms and 1000
+    steps), or a complete ``EnvConfig``, used as it is; ``preset=None`` starts from the defaults instead of the
+    id's preset, and ``EKFSLAMEnv(preset="EKFSLAM-Large-v0")`` builds an id's configuration without
+    ``gym.make``. ``overrides`` are sections applied on top, e.g. ``world={"n_landmarks": 50},
+    reward={"collision": 2.0}, filter={"motion_model": "odometry"}`` (``ekfslam_gym.filter.FilterSettings``). A
+    bad value raises ``ValueError`` naming the field. ``render_mode``: ``rgb_array`` or ``human``.
 
     ## Registered Configurations
     - ``EKFSLAM-v0``: 20 x 20 m arena, 30 landmarks, 500 steps of 0.1 s.
@@ -117,20 +120,11 @@ class EKFSLAMEnv(gym.Env):
         self,
         config: EnvConfig | str | Path | Mapping[str, Any] | None = None,
         render_mode: str | None = None,
+        *,
+        preset: str | None = None,
         **overrides: Any,
     ) -> None:
-        if isinstance(config, EnvConfig):
-            config = EnvConfig.from_overrides(config, **overrides)
-        elif isinstance(config, (str, Path)):
-            config = EnvConfig.from_yaml(config, **overrides)
-        elif isinstance(config, Mapping):
-            config = EnvConfig.from_overrides(EnvConfig.from_overrides(**config), **overrides)
-        elif config is None:
-            config = EnvConfig.from_overrides(**overrides)
-        else:
-            raise TypeError(
-                f"config must be an EnvConfig, a YAML path or a mapping, got {type(config).__name__}"
-            )
+        config = build_config(config, preset, overrides)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}"
