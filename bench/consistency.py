@@ -33,6 +33,7 @@ import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from ekfslam_gym.envs.config import EnvConfig  # noqa: E402
+from ekfslam_gym.envs.ekfslam_env import initial_estimate  # noqa: E402
 from ekfslam_gym.envs.presets import PRESETS  # noqa: E402
 from ekfslam_gym.evaluation.drivings import DRIVINGS, driving_actions  # noqa: E402
 from ekfslam_gym.filter import EKFSLAM, FilterDivergedError  # noqa: E402
@@ -46,7 +47,7 @@ MODELS = ("odometry", "wheels")
 class Run:
     """One simulated run: what every filter is fed, and the truth to score it against."""
 
-    layout_start: np.ndarray
+    initial_pose: np.ndarray  # the filter's initial estimate, a draw from its prior around the start
     n_landmarks: int
     first_readings: tuple[np.ndarray, np.ndarray]
     readings: list[tuple[np.ndarray, np.ndarray]]
@@ -66,7 +67,12 @@ def simulate(config: EnvConfig, driving: str, seed: int, steps: int, wheels: Whe
     world = World(layout, config.robot, config.sensor, config.odometry, None, config.dt, config.substeps,
                   wheel_noise=wheels)  # fmt: skip
     first = world.sense(rng)
-    run = Run(layout.start, layout.n_landmarks, (first.ids, first.z), [], {m: [] for m in MODELS},
+    start = (
+        initial_estimate(layout.start, config.filter.pose_prior, rng)
+        if config.filter.initial_draw
+        else layout.start
+    )
+    run = Run(start, layout.n_landmarks, (first.ids, first.z), [], {m: [] for m in MODELS},
               np.empty((steps, 3)), np.zeros(steps, dtype=bool))  # fmt: skip
     robot = config.robot
     for t, (a0, a1) in enumerate(driving_actions(driving, np.random.default_rng([seed, 0]), steps, robot)):
@@ -85,7 +91,7 @@ def pose_nees(run: Run, config: EnvConfig, model: str, variant: str, wheel_base:
     """Pose NEES per step of one filter on one run (NaN from a numerical failure on)."""
     ekf = EKFSLAM(
         run.n_landmarks, config.filter, motion_model=model, variant=variant, dt=config.dt,
-        measurement_noise=config.sensor.cov, initial_pose=run.layout_start,
+        measurement_noise=config.sensor.cov, initial_pose=run.initial_pose,
         min_range=max(config.sensor.min_range, 1e-3), wheel_base=wheel_base,
     )  # fmt: skip
     ekf.correct(*run.first_readings)
