@@ -15,4 +15,4 @@ from ekfslam_gym.cli.train import main
 __all__ = ["main"]
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

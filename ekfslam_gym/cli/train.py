@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 from ..training import artefacts
@@ -45,8 +46,9 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> Path:
-    """``python train.py ...``: parse the command line and ``train``; returns the run folder."""
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python train.py ...``: parse the command line and ``train``; 0 when the run is done (a bad setting
+    exits with argparse's status 2 and one line naming it)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     command = sys.argv[1:] if argv is None else list(argv)
@@ -66,7 +68,8 @@ def main(argv: list[str] | None = None) -> Path:
                               timesteps=args.timesteps, n_envs=args.n_envs)  # fmt: skip
         out = args.out or Path("runs") / f"{env_id}_seed{seed}"
     try:
-        return train(env_id, seed, entry, out, resume=args.resume is not None, progress=not args.no_progress,
-                     command=command)  # fmt: skip
+        train(env_id, seed, entry, out, resume=args.resume is not None, progress=not args.no_progress,
+              command=command)  # fmt: skip
     except SettingsError as error:  # raised before anything is created
         parser.error(str(error))
+    return 0
