@@ -256,10 +256,11 @@ class FrontierAgent(Agent):
     EKFSLAM-Loop-v0 (mean final map log det): turn_cost 0-4 m/rad (0, pure path distance, turns back and forth
     between frontiers ahead and behind and sees 0.62 of the landmarks in EKFSLAM-v0), lookahead 0.75-3.5 m
     (longer cuts corners and leaves them unexplored), min_region 1-6, replan_every 3-30, switch_margin 0-3 m,
-    stuck_steps 20-50, give_up_radius 1-2 m, the stalest landmark revisited first rather than the most uncertain
-    (by 4 nats in EKFSLAM-v0 and 10 in the loop). Most settings besides turn_cost and lookahead were within 2 nats. Active loop
-    closing is off: on EKFSLAM-Large-v0 (seeds 20000-20019) it trades map log det for landmark RMSE, -182 /
-    0.13 m without it, -98 / 0.11 at 0.3 m, -36 / 0.098 at 0.2 m, +259 / 0.049 at 0.1 m.
+    stuck_steps 20-50, give_up_radius 1-2 m, the stalest landmark revisited first rather than the most
+    uncertain (by 4 nats in EKFSLAM-v0 and 10 in the loop). Most settings besides turn_cost and lookahead were
+    within 2 nats. Active loop closing is off: on EKFSLAM-Large-v0 (seeds 20000-20019) it trades map log det
+    for landmark RMSE, -182 / 0.13 m without it, -98 / 0.11 at 0.3 m, -36 / 0.098 at 0.2 m, +259 / 0.049 at
+    0.1 m.
     """
 
     name = "frontier"

@@ -6,10 +6,10 @@ For the demonstrations to be imitable they must be in the policy's own interface
 - ``greedy``: ``GreedyPrimitivesPlanner``, the greedy information-gain planner (``ekfslam_gym.agents.greedy``)
   choosing, once per env step of a primitives env (``action.kind: primitives``), the index of the primitive to
   hold for ``action.hold`` control steps, planned from the env's belief exactly as the velocity agent plans;
-- ``frontier``: nearest-frontier exploration in either interface: ``ekfslam_gym.agents.frontier.FrontierWaypointPlanner``
-  giving, once per env step of a waypoint env (``action.kind: waypoint``), the goal on its path for the env's
-  waypoint controller; ``ekfslam_gym.agents.frontier.FrontierPrimitivesPlanner`` choosing, in a primitives env, the
-  primitive whose arc ends nearest that goal.
+- ``frontier``: nearest-frontier exploration in either interface: ``frontier.FrontierWaypointPlanner`` giving,
+  once per env step of a waypoint env (``action.kind: waypoint``), the goal on its path for the env's waypoint
+  controller; ``frontier.FrontierPrimitivesPlanner`` choosing, in a primitives env, the primitive whose arc ends
+  nearest that goal.
 
 ``make_planner(name, kind)`` builds one for an action interface.
 """

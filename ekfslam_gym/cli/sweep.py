@@ -7,9 +7,10 @@ Usage::
 
 Each (env id, seed) trains as ``python train.py --config CONFIG --env-id ID --seed S`` would (into
 ``OUT/<env-id>_seed<S>/``) and its final model is evaluated on ``--eval-seeds`` (default the evaluation seeds
-20000-20009; the held-out suite 10000-10049 is refused: ``ekfslam_gym.seeds``). Finished trials are skipped, interrupted ones resume (see
-``ekfslam_gym.training.sweep``). ``OUT/sweep.json`` and ``OUT/sweep.md`` hold, per env id, the IQM with its 95 % bootstrap
-CI of every metric pooled over the seeds' episodes and per seed (``ekfslam_gym.evaluation.aggregate``).
+20000-20009; the held-out suite 10000-10049 is refused: ``ekfslam_gym.seeds``). Finished trials are skipped,
+interrupted ones resume (see ``ekfslam_gym.training.sweep``). ``OUT/sweep.json`` and ``OUT/sweep.md`` hold, per
+env id, the IQM with its 95 % bootstrap CI of every metric pooled over the seeds' episodes and per seed
+(``ekfslam_gym.evaluation.aggregate``).
 Progress goes to stderr; with ``--json`` the last line of stdout is the JSON object of ``sweep.json``:
 ``{"env_ids", "seeds", "eval_seeds", "timesteps" (per env id), "wall_seconds", "trained_steps", "steps_per_second",
 "failed", "results": {env_id: {"pooled": summary, "seeds": {seed: summary}}}}`` with each summary as the
