@@ -7,6 +7,14 @@ from pathlib import Path
 
 # The course data lives in ../shared/data/freiburg beside the repository (see its README.md there).
 _DEFAULT_FREIBURG = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "freiburg"
+_DEFAULT_VICTORIA_PARK = _DEFAULT_FREIBURG.parent / "victoria_park" / "victoria_park.txt"
+
+
+def victoria_park_file() -> Path | None:
+    """GTSAM's victoria_park.txt: $EKFSLAM_VICTORIA_PARK if set, else ../shared/data/victoria_park beside the
+    repository; None when absent."""
+    path = Path(os.environ.get("EKFSLAM_VICTORIA_PARK", _DEFAULT_VICTORIA_PARK))
+    return path if path.is_file() else None
 
 
 def freiburg_dir() -> Path | None:

@@ -31,6 +31,7 @@ from ..data.course import read_sensor_data, read_world
 from ..data.synthetic import simulate_drive
 from ..evaluation.replay import ReplayResult, export_tum, replay, summary, true_path_name
 from ..filter import FilterDivergedError
+from .common import command_line, command_parser
 
 MAX_GIF_FRAMES = 80  # enough for a smooth loop, few enough to render in seconds
 
@@ -67,8 +68,8 @@ def _report(result: ReplayResult, source: str, n_readings: int) -> str:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="python -m ekfslam_gym.replay",
+    parser = command_parser(
+        "replay",
         description="Replay a drive through EKF-SLAM with the course's parameters. Without --data it replays "
         "the project's simulated drive (seeded by --seed).",
     )
@@ -113,6 +114,7 @@ def _check_output(parser: argparse.ArgumentParser, path: Path | None, suffix: st
         parser.error(f"{option}: directory {path.parent} does not exist")
 
 
+@command_line("replay")
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point; returns the exit status (usage errors exit 2 through ``parser.error``)."""
     parser = _parser()
