@@ -20,6 +20,7 @@ import sys
 from collections.abc import Sequence
 
 from ..evaluation.consistency import QUANTITIES, ConsistencyRun, run_consistency
+from ..filter.settings import VARIANTS
 from .common import (
     agent_from_flags,
     check_env_flags,
@@ -29,8 +30,6 @@ from .common import (
     merge_env_kwargs,
     parse_seeds,
 )
-
-VARIANTS = ("ekf", "fej", "iekf")
 
 
 def _build_parser() -> argparse.ArgumentParser:
