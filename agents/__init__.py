@@ -6,6 +6,9 @@ classic active-SLAM baseline; ``greedy2`` is the same planner looking two primit
 (nearest-frontier exploration, Yamauchi 1997, the exploration literature's baseline), and ``ppo`` (a saved
 stable-baselines3 policy; needs the ``train`` extra).
 ``make_agent(name, **kwargs)`` builds one by name, as ``python -m ekfslam_gym.evaluate --agent NAME`` does.
+The planners that demonstrate in a macro action interface, for behaviour cloning, are in ``planners``;
+``extractors`` holds ``BeliefCNN``, the features extractor configs name by its dotted path. Training itself is
+``ekfslam_gym.training``.
 """
 
 from __future__ import annotations

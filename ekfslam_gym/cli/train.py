@@ -1,0 +1,77 @@
+"""Train PPO on an EKFSLAM env from a config in rl-zoo3's format (the repository's ``train.py`` runs this).
+
+    python train.py --config configs/ppo.yaml [--env-id ID] [--timesteps N] [--seed S] [--n-envs K]
+                    [--out DIR] [--resume DIR] [--hyperparams KEY=VALUE ...] [--no-progress]
+
+The config's format and the settings only this trainer reads (``train_settings``: evaluation, checkpoints,
+``algo``, ``pretrain``) are described in ``ekfslam_gym.training.settings``; every setting, ``--hyperparams``
+included, is checked before the run folder is created, and a bad one ends the command with one line naming it.
+PPO collects whole rollouts of ``n_steps * n_envs`` env steps, so ``--timesteps`` is rounded up to them (the run
+says so). The run folder's files are listed below (``ekfslam_gym.training.artefacts``).
+
+``--resume DIR`` continues the run in DIR from its last checkpoint: weights, optimiser state, normalisation
+statistics, timestep counter and random state (``ekfslam_gym.training.run``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from ..training import artefacts
+from ..training.artefacts import read_run
+from ..training.run import train
+from ..training.settings import SettingsError, parse_hyperparams, resolve_entry
+from .common import command_parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    folder = artefacts.__doc__[artefacts.__doc__.index("The folder's files") :]
+    parser = command_parser(
+        "train", description=f"{__doc__}\n{folder}", formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--config", type=Path, default=Path("configs/ppo.yaml"))
+    parser.add_argument("--env-id", default="EKFSLAM-v0")
+    parser.add_argument("--timesteps", type=int, help="total env steps (overrides n_timesteps)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--n-envs", type=int, help="overrides n_envs")
+    parser.add_argument("--out", type=Path, help="output folder (default runs/<env-id>_seed<seed>)")
+    parser.add_argument(
+        "--resume", type=Path, help="continue the run in this folder from its last checkpoint"
+    )
+    parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",
+                        help="override entries of the config, values parsed as YAML")  # fmt: skip
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python train.py ...``: parse the command line and ``train``; 0 when the run is done (a bad setting
+    exits with argparse's status 2 and one line naming it). Errors from inside the run are raised as they are;
+    ``command_line("train")(main)`` turns them into one line too, as ``train.py`` runs it."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    command = sys.argv[1:] if argv is None else list(argv)
+    if args.resume is not None:
+        try:
+            env_id, seed, entry = read_run(args.resume)
+        except FileNotFoundError as error:
+            parser.error(str(error))
+        if args.timesteps is not None:
+            entry["n_timesteps"] = args.timesteps
+        out = args.resume
+    else:
+        if not args.config.is_file():
+            parser.error(f"config file {args.config} does not exist")
+        env_id, seed = args.env_id, args.seed
+        entry = resolve_entry(args.config, env_id, parse_hyperparams(args.hyperparams),
+                              timesteps=args.timesteps, n_envs=args.n_envs)  # fmt: skip
+        out = args.out or Path("runs") / f"{env_id}_seed{seed}"
+    try:
+        train(env_id, seed, entry, out, resume=args.resume is not None, progress=not args.no_progress,
+              command=command)  # fmt: skip
+    except SettingsError as error:  # raised before anything is created
+        parser.error(str(error))
+    return 0
