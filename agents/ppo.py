@@ -12,7 +12,10 @@ loaded whenever the file exists (and can be required with ``require_vecnormalize
 
 The trainer also writes ``config.yaml`` (env id and config entry, with its ``env_kwargs``) beside every
 model; when it is there the agent exposes the env it was trained on (``trained_env_id``,
-``trained_env_kwargs``) so the evaluator can warn about evaluating it on a different one.
+``trained_env_kwargs``): the evaluator runs it there unless told otherwise, and ``make_env()`` builds that env.
+``load_model`` loads a saved model without importing the module its pickled ``policy_kwargs`` name (a model
+trained in a checkout names the top-level ``agents`` package, which an installed wheel does not have): the
+``policy_kwargs`` are rebuilt from the record instead.
 
 stable-baselines3 is in the ``train`` extra: it is imported only when a model is loaded.
 """
@@ -101,6 +104,35 @@ def training_record(zip_path: str | Path) -> dict[str, Any] | None:
     return record if isinstance(record, dict) else None
 
 
+# Records written before the agents moved under the package (0.2.0) name their classes ``agents.<module>.<Class>``.
+LEGACY_PREFIX = "agents."
+
+
+def load_model(path: str | Path, *, device: str = "cpu", algo: str | None = None) -> Any:
+    """The SB3 model saved at ``path`` (``<model>.zip``, with or without ``.zip``), its ``policy_kwargs`` rebuilt
+    from the training record beside it when there is one (so loading never imports the module the pickle
+    names). ``algo`` (``ALGOS``) defaults to the record's, else the saved policy class's."""
+    from .training import resolve_policy_kwargs
+
+    zip_path, _ = model_paths(path)
+    if not zip_path.is_file():
+        raise FileNotFoundError(f"no saved model at {zip_path}")
+    record = training_record(zip_path)
+    entry = record.get("entry") if record is not None else None
+    custom: dict[str, Any] = {}
+    if isinstance(entry, dict) and isinstance(entry.get("policy_kwargs"), dict):
+        named = {
+            key: f"ekfslam_gym.{value}"
+            if isinstance(value, str) and value.startswith(LEGACY_PREFIX)
+            else value
+            for key, value in entry["policy_kwargs"].items()
+        }
+        custom["policy_kwargs"] = resolve_policy_kwargs(named)
+    return algo_class(algo or saved_algo(zip_path, record)).load(
+        zip_path, device=device, custom_objects=custom or None
+    )
+
+
 class PPOAgent(Agent):
     """Acts with a saved SB3 PPO or RecurrentPPO policy (deterministic: the mean action), observations normalised
     as in training; a recurrent policy's LSTM state is carried across steps and reset at every episode start.
@@ -141,7 +173,7 @@ class PPOAgent(Agent):
             if not zip_path.is_file():
                 raise FileNotFoundError(f"no saved model at {zip_path}")
             record = training_record(zip_path)
-            model = algo_class(algo or saved_algo(zip_path, record)).load(zip_path, device=device)
+            model = load_model(zip_path, device=device, algo=algo)
             if stats_path.is_file():
                 vecnormalize = load_vecnormalize(stats_path)
             elif require_vecnormalize:
@@ -157,6 +189,20 @@ class PPOAgent(Agent):
         self.recurrent = is_recurrent(model.policy)
         self._state: Any = None
         self._episode_start = np.ones((1,), dtype=bool)
+
+    def make_env(self, env_kwargs: dict[str, Any] | None = None, **make_kwargs: Any) -> gym.Env:
+        """The env the policy was trained on (its record's id and settings, ``env_kwargs`` merged on top section
+        by section), for ``run_episode`` or a loop of one's own: ``obs, _ = env.reset(seed=s)``,
+        ``agent.reset(env, s)``, then ``env.step(agent.act(obs))``. ``make_kwargs`` go to
+        ``evaluation.episodes.make_env`` (``max_episode_steps``, ``render_mode``)."""
+        from ekfslam_gym.cli.common import merge_env_kwargs
+        from ekfslam_gym.evaluation.episodes import make_env
+
+        if self.trained_env_id is None:
+            raise ValueError(f"{self!r} has no training record naming its env; build the env with gym.make")
+        return make_env(
+            self.trained_env_id, merge_env_kwargs(self.trained_env_kwargs, env_kwargs), **make_kwargs
+        )
 
     def reset(self, env: gym.Env, seed: int | None = None) -> None:
         super().reset(env, seed)
