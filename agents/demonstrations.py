@@ -16,8 +16,8 @@ actions, the rewards and each reward term (``info["reward_terms"]``); ``save``/`
 The reward's weights change only the reward, never the trajectory, so ``reweighted`` gives the same
 demonstrations under another reward whose terms were recorded (a reward sweep collects them once).
 
-Seeds: demonstrations are training data, so their seeds must avoid the held-out suite (10000-10049) and the
-evaluation seeds that select models (20000 onwards by default); ``check_seeds`` says so with a clear error.
+Seeds: demonstrations are training data, so their seeds must avoid the held-out suite and the evaluation seeds
+that select models (``ekfslam_gym.seeds``); ``collect`` checks them with ``check_demonstration_seeds``.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ import numpy as np
 
 from ekfslam_gym.envs.actions import PRIMITIVES
 from ekfslam_gym.envs.rewards import REWARD_NAMES
-from ekfslam_gym.evaluation.episodes import HELD_OUT_SEEDS
+from ekfslam_gym.seeds import SELECTION_SEEDS, check_demonstration_seeds
 
 from .base import wall_scan
 from .frontier import FrontierPrimitivesPlanner, FrontierWaypointPlanner
@@ -135,19 +135,6 @@ def make_planner(
     return FrontierWaypointPlanner(**kwargs) if kind == "waypoint" else FrontierPrimitivesPlanner(**kwargs)
 
 
-def check_seeds(seeds: Iterable[int], eval_seeds: Iterable[int] = range(20000, 20010)) -> list[int]:
-    """``seeds`` as a list; ValueError if any is negative, in the held-out suite or among ``eval_seeds``."""
-    seeds = [int(s) for s in seeds]
-    forbidden = set(HELD_OUT_SEEDS) | {int(s) for s in eval_seeds}
-    bad = sorted({s for s in seeds if s < 0 or s in forbidden})
-    if bad:
-        raise ValueError(
-            f"demonstration seeds {bad[:5]}{'...' if len(bad) > 5 else ''} are negative, in the held-out suite "
-            "(10000-10049) or among the evaluation seeds; pick a training range such as 30000 onwards"
-        )
-    return seeds
-
-
 @dataclass
 class Demonstrations:
     """(observation, action) pairs of a planner, with the episode each pair came from and its reward.
@@ -185,19 +172,19 @@ def collect(
     *,
     planner: str = "greedy",
     planner_kwargs: Mapping[str, Any] | None = None,
-    eval_seeds: Iterable[int] = range(20000, 20010),
+    eval_seeds: Iterable[int] = SELECTION_SEEDS,
     driver: Any = None,
 ) -> Demonstrations:
     """One episode of the planner per seed in ``env_id`` built as the trainer builds its envs
     (``gym.make(id, **env_kwargs)``, so ``max_episode_steps`` is gym.make's limit); the env must use the
-    planner's action interfaces (``PLANNERS``). Seeds are checked with ``check_seeds``.
+    planner's action interfaces (``PLANNERS``). Seeds are checked with ``check_demonstration_seeds``.
 
     With ``driver`` (an ``Agent``, e.g. the policy being cloned), the driver's actions are executed and the
     planner only labels each visited observation with its own choice: the states the learner reaches, labelled
     by the expert (DAgger; Ross, Gordon & Bagnell 2011). ``rewards`` are then the driven episode's."""
     import ekfslam_gym  # noqa: F401  (registers the env ids)
 
-    seeds = check_seeds(seeds, eval_seeds)
+    seeds = check_demonstration_seeds(seeds, eval_seeds)
     if not seeds:
         raise ValueError("no demonstration seeds")
     qualified = env_id if ":" in env_id else f"ekfslam_gym:{env_id}"

@@ -287,7 +287,8 @@ def test_known_association_counts_nothing(sensor):
 
 
 def test_evaluation_reports_the_counts_and_scores_slots_by_the_landmark_they_hold():
-    from ekfslam_gym.evaluation.episodes import ASSOCIATION_KEYS, METRIC_KEYS, evaluate_agent
+    from ekfslam_gym.evaluation.episode_metrics import ASSOCIATION_KEYS, METRIC_KEYS
+    from ekfslam_gym.evaluation.rollout import evaluate_agent
 
     class Held:
         name = "held"

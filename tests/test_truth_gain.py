@@ -142,7 +142,8 @@ def test_gain_correlation_known_answers():
 def test_evaluation_reports_the_belief_truth_correlation_and_the_final_map_nees(overrides):
     """run_episode correlates info["belief_gain"] with info["truth_gain"], step by step, and scores the final
     map: the joint NEES of the slots holding a landmark, over its 2 n dof."""
-    from ekfslam_gym.evaluation.episodes import BELIEF_KEYS, METRIC_KEYS, make_env, run_episode
+    from ekfslam_gym.evaluation.episode_metrics import BELIEF_KEYS, METRIC_KEYS
+    from ekfslam_gym.evaluation.rollout import make_env, run_episode
 
     class Held:
         name = "held"

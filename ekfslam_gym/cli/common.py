@@ -6,22 +6,16 @@ import argparse
 from collections.abc import Mapping
 from typing import Any
 
+from .. import seeds
+
 
 def parse_seeds(text: str) -> list[int]:
-    """``A-B`` (inclusive), ``A,B,C``, or a mix such as ``0-4,10``."""
-    seeds: list[int] = []
+    """``--seeds``: a suite's name (``heldout``, ``eval``), ``A-B`` (inclusive), ``A,B,C``, or a mix such as
+    ``0-4,10`` (``ekfslam_gym.seeds.parse_seeds``)."""
     try:
-        for part in filter(None, (p.strip() for p in text.split(","))):
-            lo, _, hi = part.partition("-")
-            first, last = int(lo), int(hi or lo)
-            if last < first:
-                raise argparse.ArgumentTypeError(f"empty seed range {part!r}")
-            seeds.extend(range(first, last + 1))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"seeds must look like A-B or A,B,C, got {text!r}") from None
-    if not seeds:
-        raise argparse.ArgumentTypeError(f"no seeds in {text!r}")
-    return seeds
+        return seeds.parse_seeds(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def merge_env_kwargs(

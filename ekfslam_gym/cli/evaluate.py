@@ -2,7 +2,8 @@
 
 Usage::
 
-    python -m ekfslam_gym.evaluate --agent greedy                       # the held-out suite, a text summary
+    python -m ekfslam_gym.evaluate --agent greedy                       # the evaluation seeds, a text summary
+    python -m ekfslam_gym.evaluate --agent greedy --seeds heldout       # the held-out suite: the final table
     python -m ekfslam_gym.evaluate --agent ppo --model models/ppo_EKFSLAM-v0.zip --json
     python -m ekfslam_gym.evaluate --compare --model models/ppo_EKFSLAM-v0.zip --table results.md --plot results.png
     python -m ekfslam_gym.evaluate --agent random,circle --seeds 0-9 --max-episode-steps 100 --gif gifs/
@@ -16,8 +17,9 @@ record), and an ``--env-id`` other than the record's is an error unless ``--forc
 of the recorded settings (with a warning). ``--agent module:Class`` (or ``module:function``) evaluates an agent
 of your own (``docs/writing-an-agent.md``).
 
-The default seeds are the held-out suite (10000-10049). The metrics are described in
-``ekfslam_gym.evaluation.episodes``, the JSON output in ``ekfslam_gym.evaluation.report``. ``--export-tum DIR``
+The default seeds are the evaluation seeds (20000-20049); the held-out suite (10000-10049), for the final
+table only, is asked for by name, ``--seeds heldout`` (``ekfslam_gym.seeds``). The metrics are described in
+``ekfslam_gym.evaluation.episode_metrics``, the JSON output in ``ekfslam_gym.evaluation.report``. ``--export-tum DIR``
 writes, per episode, ``<agent>_<seed>_true.tum`` and ``<agent>_<seed>_estimate.tum`` (TUM trajectories: the
 poses after each step at step * dt s, z = 0, the heading as a quaternion about z; evo's APE on them without
 alignment is the ``ate`` metric) and ``<agent>_<seed>_landmarks.csv`` (``ekfslam_gym.data.tum``).
@@ -33,15 +35,11 @@ from pathlib import Path
 from typing import Any
 
 from ..evaluation.aggregate import summary
-from ..evaluation.episodes import (
-    ASSOCIATION_KEYS,
-    HELD_OUT_SEEDS,
-    METRIC_KEYS,
-    NEES_STEP_BOUNDS,
-    SMOOTHER_KEYS,
-    evaluate_agent,
-)
+from ..evaluation.episode_metrics import ASSOCIATION_KEYS, METRIC_KEYS, NEES_STEP_BOUNDS
 from ..evaluation.report import json_safe, markdown_table, plot_results, text_summary
+from ..evaluation.rollout import evaluate_agent
+from ..evaluation.smoothing import SMOOTHER_KEYS
+from ..seeds import EVAL_SEEDS, HELD_OUT, SUITES, span, suite_name
 from .common import merge_env_kwargs, parse_seeds
 
 DEFAULT_ENV_ID = "EKFSLAM-v0"
@@ -52,7 +50,8 @@ def _build_parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(
         prog="python -m ekfslam_gym.evaluate",
-        description="Evaluate agents on a seed suite (default: the held-out seeds 10000-10049).",
+        description=f"Evaluate agents on a seed suite (default: the evaluation seeds {span(EVAL_SEEDS)}; the "
+        f"held-out suite {HELD_OUT} by name, --seeds heldout).",
     )
     parser.add_argument("--agent", default=None,
                         help=f"an agent or a comma-separated list (a comparison); one of {', '.join(AGENTS)}, or "
@@ -75,8 +74,9 @@ def _build_parser() -> argparse.ArgumentParser:
                              "runs on its own training env settings (read beside the model) with these on top")  # fmt: skip
     parser.add_argument("--agent-kwargs", type=json.loads, default=None,
                         help='constructor arguments per agent as JSON, e.g. \'{"circle": {"radius": 2.0}}\'')  # fmt: skip
-    parser.add_argument("--seeds", type=parse_seeds, default=list(HELD_OUT_SEEDS),
-                        help="A-B (inclusive) or A,B,C; default the held-out suite 10000-10049")  # fmt: skip
+    parser.add_argument("--seeds", type=parse_seeds, default=list(EVAL_SEEDS),
+                        help=f"A-B (inclusive), A,B,C or a suite's name ({', '.join(SUITES)}); default the "
+                             f"evaluation seeds {span(EVAL_SEEDS)}; heldout is {HELD_OUT}, for the final table only")  # fmt: skip
     parser.add_argument("--max-episode-steps", type=int, default=None, help="shorter episodes (smoke tests)")
     parser.add_argument("--json", action="store_true", help="print exactly one JSON object to stdout")
     parser.add_argument("--gif", metavar="DIR", default=None, help="write one GIF per episode to DIR")
@@ -210,9 +210,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         path = Path(args.table)
         path.parent.mkdir(parents=True, exist_ok=True)
         seeds = args.seeds
-        held_out = " (the held-out suite)" if list(seeds) == list(HELD_OUT_SEEDS) else ""
+        names = {"heldout": " (the held-out suite)", "eval": " (the evaluation seeds)"}
+        named = names.get(suite_name(seeds) or "", "")
         path.write_text(
-            f"`{args.env_id}`, seeds {seeds[0]}-{seeds[-1]}{held_out}, {len(seeds)} episodes per agent.\n\n"
+            f"`{args.env_id}`, seeds {span(seeds)}{named}, {len(seeds)} episodes per agent.\n\n"
             + markdown_table(summaries, keys)
         )
     if args.plot:

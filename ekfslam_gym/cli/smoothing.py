@@ -1,6 +1,6 @@
 """Filter vs the full-SLAM smoother on env episodes (see ``ekfslam_gym.evaluation.smoothing``).
 
-python -m ekfslam_gym.smoothing [--env-id EKFSLAM-v0] [--seeds 10000-10004] [--agent circle] [--json]
+python -m ekfslam_gym.smoothing [--env-id EKFSLAM-v0] [--seeds 20000-20004] [--agent circle] [--json]
 """
 
 from __future__ import annotations
@@ -9,8 +9,9 @@ import argparse
 import json
 import sys
 
-from ..evaluation.episodes import EpisodeRecorder, run_episode
-from ..evaluation.smoothing import compare_with_smoother
+from ..evaluation.rollout import run_episode
+from ..evaluation.smoothing import EpisodeRecorder, compare_with_smoother
+from ..seeds import EVAL_SEEDS, span
 from .common import parse_seeds
 
 
@@ -25,7 +26,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument("--agent", default="circle")
-    parser.add_argument("--seeds", default="10000-10004")
+    parser.add_argument("--seeds", default=span(EVAL_SEEDS[:5]),
+                        help="evaluation seeds by default; A-B, A,B,C or a suite's name (heldout, eval)")  # fmt: skip
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     rows = []

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from . import metrics
-from .episodes import METRIC_KEYS, NEES_STEP_BOUNDS, POSE_DIM
+from .episode_metrics import METRIC_KEYS, NEES_STEP_BOUNDS, POSE_DIM
 
 # Which way is better, for the table's arrows (None: neither, e.g. ANEES should be near 3, path length is context).
 BETTER: dict[str, str | None] = {
