@@ -194,9 +194,9 @@ class PPOAgent(Agent):
         """The env the policy was trained on (its record's id and settings, ``env_kwargs`` merged on top section
         by section), for ``run_episode`` or a loop of one's own: ``obs, _ = env.reset(seed=s)``,
         ``agent.reset(env, s)``, then ``env.step(agent.act(obs))``. ``make_kwargs`` go to
-        ``evaluation.episodes.make_env`` (``max_episode_steps``, ``render_mode``)."""
+        ``evaluation.rollout.make_env`` (``max_episode_steps``, ``render_mode``)."""
         from ekfslam_gym.cli.common import merge_env_kwargs
-        from ekfslam_gym.evaluation.episodes import make_env
+        from ekfslam_gym.evaluation.rollout import make_env
 
         if self.trained_env_id is None:
             raise ValueError(f"{self!r} has no training record naming its env; build the env with gym.make")
