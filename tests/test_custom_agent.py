@@ -7,10 +7,9 @@ import json
 import sys
 
 import pytest
-
 from ekfslam_gym.agents import is_agent_name, make_agent
 
-MODULE = '''
+MODULE = """
 import numpy as np
 
 
@@ -34,7 +33,7 @@ def slow():
 class NoAct:
     def reset(self, env, seed=None):
         pass
-'''
+"""
 
 
 @pytest.fixture

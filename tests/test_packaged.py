@@ -39,7 +39,9 @@ def test_a_config_path_wins_over_a_packaged_name(tmp_path, monkeypatch):
 
 def test_an_unknown_config_names_the_packaged_recipes(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    with pytest.raises(FileNotFoundError, match="neither a file nor a packaged recipe; packaged recipes: ppo, "):
+    with pytest.raises(
+        FileNotFoundError, match="neither a file nor a packaged recipe; packaged recipes: ppo, "
+    ):
         packaged.resolve_config("nope")
     with pytest.raises(FileNotFoundError):  # a folder other than configs/ is a path, never a recipe name
         packaged.resolve_config("elsewhere/ppo.yaml")
@@ -111,7 +113,9 @@ def test_loading_needs_no_top_level_agents_module(tmp_path):
         "print(type(agent.model.policy.features_extractor).__module__)\n"
         "print(any(m == 'agents' or m.startswith('agents.') for m in sys.modules))\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, check=True
+    )
     assert out.stdout.split() == ["ekfslam_gym.agents.extractors", "False"]
 
 
@@ -120,7 +124,9 @@ def test_a_record_naming_the_old_agents_package_still_loads(tmp_path):
     for suffix in (".zip", "_vecnormalize.pkl"):
         (tmp_path / f"model{suffix}").write_bytes((ROOT / "models" / f"ppo_EKFSLAM-v0{suffix}").read_bytes())
     record = (ROOT / "models" / "ppo_EKFSLAM-v0_config.yaml").read_text()
-    Path(f"{stem}_config.yaml").write_text(record.replace("ekfslam_gym.agents.extractors", "agents.extractors"))
+    Path(f"{stem}_config.yaml").write_text(
+        record.replace("ekfslam_gym.agents.extractors", "agents.extractors")
+    )
     model = ekfslam_gym.load_model(stem)
     assert type(model.policy.features_extractor).__module__ == "ekfslam_gym.agents.extractors"
 
