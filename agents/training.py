@@ -51,6 +51,7 @@ from typing import Any
 
 import yaml
 
+from ekfslam_gym.packaged import DEFAULT_CONFIG, config_names, resolve_config
 from ekfslam_gym.seeds import EVAL_SEED_START, SELECTION_EPISODES
 
 from .imitation import validate_pretrain
@@ -501,7 +502,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--config", type=Path, default=Path("configs/ppo.yaml"))
+    parser.add_argument("--config", default=DEFAULT_CONFIG,
+                        help="a training config (rl-zoo3 format): a path, or a packaged recipe by name "
+                             f"({', '.join(config_names())}); default {DEFAULT_CONFIG}")  # fmt: skip
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument("--timesteps", type=int, help="total env steps (overrides n_timesteps)")
     parser.add_argument("--seed", type=int, default=0)
@@ -530,8 +533,10 @@ def main(argv: list[str] | None = None) -> Path:
             entry["n_timesteps"] = args.timesteps
         out = args.resume
     else:
-        if not args.config.is_file():
-            parser.error(f"config file {args.config} does not exist")
+        try:
+            args.config = resolve_config(args.config)
+        except FileNotFoundError as error:
+            parser.error(str(error))
         env_id, seed = args.env_id, args.seed
         entry = resolve_entry(args.config, env_id, parse_hyperparams(args.hyperparams),
                               timesteps=args.timesteps, n_envs=args.n_envs)  # fmt: skip
