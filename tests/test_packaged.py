@@ -136,3 +136,21 @@ def test_version_is_written_once():
 
     assert version("ekfslam-gym") == ekfslam_gym.__version__
     assert "version =" not in (ROOT / "pyproject.toml").read_text().split("[project]")[1].split("[")[0]
+
+
+@pytest.mark.parametrize("command", ["ekfslam_gym.cli.train", "ekfslam_gym.cli.sweep"])
+def test_the_training_commands_name_the_packaged_recipes(command, tmp_path, monkeypatch, capsys):
+    import importlib
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit):
+        importlib.import_module(command).main(["--config", "nope", "--seeds", "0"][: 2 if "train" in command else 4])
+    assert "config 'nope' is neither a file nor a packaged recipe; packaged recipes: ppo," in capsys.readouterr().err
+
+
+def test_the_sweep_resolves_its_default_config_from_any_folder(tmp_path, monkeypatch):
+    from ekfslam_gym.cli import sweep
+
+    monkeypatch.chdir(tmp_path)
+    args = sweep._build_parser().parse_args(["--seeds", "0"])
+    assert packaged.resolve_config(args.config) == packaged.resolve_config("ppo").resolve()
