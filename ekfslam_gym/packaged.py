@@ -42,7 +42,7 @@ def resolve_config(name_or_path: str | Path) -> Path:
         if packaged.is_file():
             return packaged
     raise FileNotFoundError(
-        f"config {str(name_or_path)!r} is neither a file nor a packaged recipe; packaged recipes: "
+        f"config {str(name_or_path)!r} does not exist (neither a file nor a packaged recipe); packaged recipes: "
         f"{', '.join(config_names())}"
     )
 

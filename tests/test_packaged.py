@@ -40,7 +40,8 @@ def test_a_config_path_wins_over_a_packaged_name(tmp_path, monkeypatch):
 def test_an_unknown_config_names_the_packaged_recipes(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with pytest.raises(
-        FileNotFoundError, match="neither a file nor a packaged recipe; packaged recipes: ppo, "
+        FileNotFoundError,
+        match=r"does not exist \(neither a file nor a packaged recipe\); packaged recipes: ppo, ",
     ):
         packaged.resolve_config("nope")
     with pytest.raises(FileNotFoundError):  # a folder other than configs/ is a path, never a recipe name
@@ -144,8 +145,13 @@ def test_the_training_commands_name_the_packaged_recipes(command, tmp_path, monk
 
     monkeypatch.chdir(tmp_path)
     with pytest.raises(SystemExit):
-        importlib.import_module(command).main(["--config", "nope", "--seeds", "0"][: 2 if "train" in command else 4])
-    assert "config 'nope' is neither a file nor a packaged recipe; packaged recipes: ppo," in capsys.readouterr().err
+        importlib.import_module(command).main(
+            ["--config", "nope", "--seeds", "0"][: 2 if "train" in command else 4]
+        )
+    assert (
+        "config 'nope' does not exist (neither a file nor a packaged recipe); packaged recipes: ppo,"
+        in capsys.readouterr().err
+    )
 
 
 def test_the_sweep_resolves_its_default_config_from_any_folder(tmp_path, monkeypatch):
