@@ -46,9 +46,9 @@ def main(argv: list[str] | None = None) -> int:
     hyper = (
         ["n_steps=32", "batch_size=64", "n_envs=2", "eval_freq=0", "checkpoint_freq=0"] if args.smoke else []
     )
-    run = train.main(["--config", str(ROOT / "configs" / "ppo.yaml"), "--timesteps", str(steps),
-                      "--out", str(out / "ppo_short"), *(["--no-progress"] if args.smoke else []),
-                      *(["--hyperparams", *hyper] if hyper else [])])  # fmt: skip
+    run = out / "ppo_short"
+    train.main(["--config", str(ROOT / "configs" / "ppo.yaml"), "--timesteps", str(steps), "--out", str(run),
+                *(["--no-progress"] if args.smoke else []), *(["--hyperparams", *hyper] if hyper else [])])  # fmt: skip
     print(f"learning curve: {run / 'learning_curve.png'}")
 
     print("\n== 3. Baselines and PPO on held-out seeds", flush=True)

@@ -1,60 +1,18 @@
-"""Train PPO on an EKFSLAM env from configs/ppo.yaml: the command line of ``ekfslam_gym.agents.training`` (see its docstring).
+"""Train PPO on an EKFSLAM env from configs/ppo.yaml: a thin script over ``ekfslam_gym.cli.train`` (see its
+docstring, or ``python train.py --help``).
 
     python train.py --config configs/ppo.yaml [--env-id ID] [--timesteps N] [--seed S] [--n-envs K]
                     [--out DIR] [--resume DIR] [--hyperparams KEY=VALUE ...] [--no-progress]
 
-The implementation lives in the installed package (``ekfslam_gym.agents.training``) so that code without this repository's
-root on its path (a pip install, the sweep's Ray workers) can train too; this script keeps the old names.
+The implementation lives in the installed package (``ekfslam_gym.training``) so that code without this
+repository's root on its path (a pip install, the sweep's Ray workers) can train too.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
+from ekfslam_gym.cli.train import main
 
-from ekfslam_gym.agents.training import (
-    NORMALIZE_DEFAULTS,
-    SETTINGS_KEYS,
-    SETTINGS_SECTION,
-    TRAIN_KEYS,
-    build_callbacks,
-    latest_checkpoint,
-    load_entry,
-    main,
-    make_envs,
-    parse_hyperparams,
-    plot_learning_curve,
-    read_monitor,
-    read_run,
-    resolve_entry,
-    save_checkpoint,
-    save_with_stats,
-    schedule,
-    train,
-    versions,
-)
-
-__all__ = [
-    "NORMALIZE_DEFAULTS",
-    "SETTINGS_KEYS",
-    "SETTINGS_SECTION",
-    "TRAIN_KEYS",
-    "Path",
-    "build_callbacks",
-    "latest_checkpoint",
-    "load_entry",
-    "main",
-    "make_envs",
-    "parse_hyperparams",
-    "plot_learning_curve",
-    "read_monitor",
-    "read_run",
-    "resolve_entry",
-    "save_checkpoint",
-    "save_with_stats",
-    "schedule",
-    "train",
-    "versions",
-]
+__all__ = ["main"]
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

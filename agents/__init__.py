@@ -8,6 +8,9 @@ stable-baselines3 policy; needs the ``train`` extra).
 ``make_agent(name, **kwargs)`` builds one by name, as ``python -m ekfslam_gym.evaluate --agent NAME`` does; a
 name of the form ``module:Class`` (or ``module:function``, a factory) builds a user's own agent, any object with
 ``reset(env, seed)`` and ``act(observation)`` (docs/writing-an-agent.md).
+The planners that demonstrate in a macro action interface, for behaviour cloning, are in ``planners``;
+``extractors`` holds ``BeliefCNN``, the features extractor configs name by its dotted path. Training itself is
+``ekfslam_gym.training``.
 """
 
 from __future__ import annotations

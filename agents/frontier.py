@@ -27,9 +27,10 @@ walls of a closed block is tried once, not forever.
 Revisiting: when no frontier is left, or every landmark the filter carries has been seen (its state has one
 slot per landmark, so nothing is left to discover), the agent improves the map it has (Thrun, Burgard & Fox,
 *Probabilistic Robotics*, ch. 17: re-observing mapped landmarks to close loops). It drives to the seen
-landmark whose estimate has been out of the sensor's range and field of view the longest (``stalest``; or,
-with ``revisit="uncertain"``, the one with the largest marginal covariance) until that landmark is within
-``revisit_range`` m in the field of view, then picks the next, skipping the ``revisit_memory`` most recent.
+landmark whose estimate has been out of the sensor's range and field of view the longest until that landmark
+is within ``revisit_range`` m in the field of view, then picks the next, skipping the ``revisit_memory`` most
+recent. (Choosing the landmark of largest marginal covariance instead did worse, by 4 nats of final map log det
+in EKFSLAM-v0 and 10 in the loop, and was removed; docs/results.md keeps the record.)
 
 Active loop closing (Stachniss, Hahnel & Burgard 2004, "Exploration with active loop-closing for FastSLAM";
 off by default): with ``relocalize_std`` set, when the pose estimate's position standard deviation
@@ -241,7 +242,7 @@ class FrontierAgent(Agent):
             frontier cells are no longer sought. switch_margin: m by which another frontier must be nearer
             than the current goal to replace it. join: m, scan end points closer than this are one wall.
             revisit_range: m within which a revisited landmark counts as seen again. revisit_memory: the most
-            recently revisited landmarks not chosen again. revisit: ``"stalest"`` or ``"uncertain"``.
+            recently revisited landmarks not chosen again.
             controller: keyword arguments of the ``WaypointController``. relocalize_std: m of pose position
             std above which the agent relocalises (None: never). relocalize_until: the fraction of
             relocalize_std below which it explores again. anchor_ratio: a landmark helps relocalise when its
@@ -255,10 +256,11 @@ class FrontierAgent(Agent):
     EKFSLAM-Loop-v0 (mean final map log det): turn_cost 0-4 m/rad (0, pure path distance, turns back and forth
     between frontiers ahead and behind and sees 0.62 of the landmarks in EKFSLAM-v0), lookahead 0.75-3.5 m
     (longer cuts corners and leaves them unexplored), min_region 1-6, replan_every 3-30, switch_margin 0-3 m,
-    stuck_steps 20-50, give_up_radius 1-2 m, revisit stalest or uncertain (stalest by 4 nats in EKFSLAM-v0
-    and 10 in the loop). Most settings besides turn_cost and lookahead were within 2 nats. Active loop
-    closing is off: on EKFSLAM-Large-v0 (seeds 20000-20019) it trades map log det for landmark RMSE, -182 /
-    0.13 m without it, -98 / 0.11 at 0.3 m, -36 / 0.098 at 0.2 m, +259 / 0.049 at 0.1 m.
+    stuck_steps 20-50, give_up_radius 1-2 m, the stalest landmark revisited first rather than the most
+    uncertain (by 4 nats in EKFSLAM-v0 and 10 in the loop). Most settings besides turn_cost and lookahead were
+    within 2 nats. Active loop closing is off: on EKFSLAM-Large-v0 (seeds 20000-20019) it trades map log det
+    for landmark RMSE, -182 / 0.13 m without it, -98 / 0.11 at 0.3 m, -36 / 0.098 at 0.2 m, +259 / 0.049 at
+    0.1 m.
     """
 
     name = "frontier"
@@ -277,7 +279,6 @@ class FrontierAgent(Agent):
         join: float = 1.5,
         revisit_range: float = 3.0,
         revisit_memory: int = 3,
-        revisit: str = "stalest",
         controller: dict[str, Any] | None = None,
         relocalize_std: float | None = None,
         relocalize_until: float = 0.6,
@@ -315,9 +316,6 @@ class FrontierAgent(Agent):
         self.join = float(join)
         self.revisit_range = float(revisit_range)
         self.revisit_memory = int(revisit_memory)
-        if revisit not in ("stalest", "uncertain"):
-            raise ValueError(f"revisit must be 'stalest' or 'uncertain', got {revisit!r}")
-        self.revisit = revisit
         self.controller_kwargs = dict(controller or {})
 
     def reset(self, env: gym.Env, seed: int | None = None) -> None:
@@ -471,12 +469,10 @@ class FrontierAgent(Agent):
         return self.turn_cost * turn, home
 
     def _plan_revisit(self, pose: np.ndarray, dist: np.ndarray, parent: np.ndarray) -> None:
-        """No frontier left: drive to the seen landmark out of view the longest (or the most uncertain)."""
+        """No frontier left: drive to the seen landmark out of view the longest."""
         self.mode = "revisit"
 
         def score(covs: np.ndarray, path: np.ndarray) -> np.ndarray:
-            if self.revisit == "uncertain":
-                return covs[:, 0, 0] + covs[:, 1, 1]
             return self._t - self._last_view + 1.0
 
         if not self._drive_to_landmark(pose, dist, parent, score):

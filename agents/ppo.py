@@ -104,16 +104,39 @@ def training_record(zip_path: str | Path) -> dict[str, Any] | None:
     return record if isinstance(record, dict) else None
 
 
+# policy_kwargs entries that name a class or function, resolved from a dotted name (``resolve_policy_kwargs``).
+CLASS_KWARGS = ("features_extractor_class", "activation_fn", "optimizer_class")
 # Records written before the agents moved under the package (0.2.0) name their classes ``agents.<module>.<Class>``.
 LEGACY_PREFIX = "agents."
+
+
+def import_dotted(name: str) -> Any:
+    """The object a dotted name points at (``ekfslam_gym.agents.extractors.BeliefCNN``; ``nn.X`` is ``torch.nn.X``)."""
+    import importlib
+
+    if name.startswith("nn."):
+        name = "torch." + name
+    module, _, attribute = name.rpartition(".")
+    if not module:
+        raise ValueError(f"{name!r} is not a dotted name (module.Class)")
+    try:
+        return getattr(importlib.import_module(module), attribute)
+    except (ImportError, AttributeError) as error:
+        raise ValueError(f"cannot import {name!r}: {error}") from None
+
+
+def resolve_policy_kwargs(kwargs: dict[str, Any] | None) -> dict[str, Any] | None:
+    """``policy_kwargs`` with the class names of ``CLASS_KWARGS`` given as dotted strings imported (the trainer
+    builds a policy with them, and ``load_model`` rebuilds a saved one's)."""
+    if kwargs is None:
+        return None
+    return {k: import_dotted(v) if k in CLASS_KWARGS and isinstance(v, str) else v for k, v in kwargs.items()}
 
 
 def load_model(path: str | Path, *, device: str = "cpu", algo: str | None = None) -> Any:
     """The SB3 model saved at ``path`` (``<model>.zip``, with or without ``.zip``), its ``policy_kwargs`` rebuilt
     from the training record beside it when there is one (so loading never imports the module the pickle
     names). ``algo`` (``ALGOS``) defaults to the record's, else the saved policy class's."""
-    from .training import resolve_policy_kwargs
-
     zip_path, _ = model_paths(path)
     if not zip_path.is_file():
         raise FileNotFoundError(f"no saved model at {zip_path}")
@@ -195,8 +218,7 @@ class PPOAgent(Agent):
         by section), for ``run_episode`` or a loop of one's own: ``obs, _ = env.reset(seed=s)``,
         ``agent.reset(env, s)``, then ``env.step(agent.act(obs))``. ``make_kwargs`` go to
         ``evaluation.rollout.make_env`` (``max_episode_steps``, ``render_mode``)."""
-        from ekfslam_gym.cli.common import merge_env_kwargs
-        from ekfslam_gym.evaluation.rollout import make_env
+        from ekfslam_gym.evaluation.rollout import make_env, merge_env_kwargs
 
         if self.trained_env_id is None:
             raise ValueError(f"{self!r} has no training record naming its env; build the env with gym.make")

@@ -14,7 +14,6 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -49,8 +48,7 @@ def main(argv=None) -> None:
     parser.add_argument("--n-envs", type=int, nargs="+", default=[1, 2, 8])
     parser.add_argument("--smoke", action="store_true", help="tiny sizes: a check that the script runs")
     args = parser.parse_args(argv)
-    sys.path.insert(0, str(ROOT))
-    from train import schedule  # rl-zoo3's "lin_X" schedules, as train.py reads them
+    from ekfslam_gym.training.settings import schedule  # rl-zoo3's "lin_X" schedules, as train.py reads them
 
     entry = yaml.safe_load((ROOT / "configs" / "ppo.yaml").read_text())["EKFSLAM-v0"]
     keys = ("n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "learning_rate", "ent_coef", "clip_range",

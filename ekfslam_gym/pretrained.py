@@ -61,8 +61,7 @@ def make_env_for_model(
     from stable_baselines3.common.vec_env import VecNormalize
 
     from ekfslam_gym.agents.ppo import model_paths
-    from ekfslam_gym.cli.common import merge_env_kwargs
-    from ekfslam_gym.evaluation.rollout import make_env
+    from ekfslam_gym.evaluation.rollout import make_env, merge_env_kwargs
 
     env_id, trained = model_env(path)
     settings = merge_env_kwargs(trained, env_kwargs)

@@ -4,6 +4,7 @@ actions), and the ``pretrain`` switch of train.py's config. Never asserts learni
 synthetic tasks whose answers are known."""
 
 import json
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -11,18 +12,20 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from ekfslam_gym.agents import demonstrations as demo_mod  # noqa: E402
-from ekfslam_gym.agents.demonstrations import Demonstrations, GreedyPrimitivesPlanner, collect  # noqa: E402
-from ekfslam_gym.agents.imitation import (  # noqa: E402
+from ekfslam_gym.agents.planners import GreedyPrimitivesPlanner  # noqa: E402
+
+from ekfslam_gym.envs.actions import PRIMITIVES  # noqa: E402
+from ekfslam_gym.training import artefacts, settings  # noqa: E402
+from ekfslam_gym.training import demonstrations as demo_mod  # noqa: E402
+from ekfslam_gym.training.cloning import (  # noqa: E402
     BOX_MATCH,
     behaviour_clone,
     discounted_running_returns,
     fit_normalizer,
     returns_to_go,
-    validate_pretrain,
 )
-
-from ekfslam_gym.envs.actions import PRIMITIVES  # noqa: E402
+from ekfslam_gym.training.demonstrations import Demonstrations, collect  # noqa: E402
+from ekfslam_gym.training.settings import validate_pretrain  # noqa: E402
 
 PRIMITIVE_KWARGS = {"action": {"kind": "primitives", "hold": 10}, "max_episode_steps": 6}
 WAYPOINT_KWARGS = {"action": {"kind": "waypoint", "hold": 10}, "max_episode_steps": 6}
@@ -434,21 +437,20 @@ def test_pretrain_setting_validates():
 
 
 def test_train_settings_switch_is_checked_and_absent_means_none(tmp_path):
-    import train
 
-    assert train.load_entry(train.Path("configs/ppo_primitives.yaml"), "EKFSLAM-v0")["pretrain"] is None
+    assert settings.load_entry(Path("configs/ppo_primitives.yaml"), "EKFSLAM-v0")["pretrain"] is None
     for env_id in ("EKFSLAM-v0", "EKFSLAM-Loop-v0"):
-        entry = train.load_entry(train.Path("configs/ppo_primitives_bc.yaml"), env_id)
+        entry = settings.load_entry(Path("configs/ppo_primitives_bc.yaml"), env_id)
         assert (
             entry["pretrain"]["planner"] == "greedy" and entry["env_kwargs"]["action"]["kind"] == "primitives"
         )
     bad = tmp_path / "bad.yaml"
     bad.write_text("EKFSLAM-v0: {n_steps: 64}\ntrain_settings: {EKFSLAM-v0: {pretrain: {epoch: 3}}}\n")
     with pytest.raises(SystemExit, match="unknown pretrain keys"):
-        train.load_entry(bad, "EKFSLAM-v0")
+        settings.load_entry(bad, "EKFSLAM-v0")
     bad.write_text("EKFSLAM-v0: {n_steps: 64, pretrain: {epochs: 3}}\n")
     with pytest.raises(SystemExit, match="train_settings"):
-        train.load_entry(bad, "EKFSLAM-v0")
+        settings.load_entry(bad, "EKFSLAM-v0")
 
 
 def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
@@ -465,7 +467,7 @@ def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
         assert (out / name).is_file(), name
     record = json.loads((out / "pretrain.json").read_text())
     assert record["pairs"] == 16 and record["clone"]["holdout_episodes"] == 1
-    saved = train.read_run(out)[2]["pretrain"]
+    saved = artefacts.read_run(out)[2]["pretrain"]
     assert saved["episodes"] == 2 and saved["epochs"] == 2 and saved["seed"] == 30000  # defaults recorded too
     demos = demo_mod.load(out / "demonstrations.npz")
     assert demos.meta["env_kwargs"]["max_episode_steps"] == 8
@@ -552,9 +554,7 @@ def test_the_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
     from ekfslam_gym.agents import PPOAgent
     from ekfslam_gym.agents.extractors import BeliefCNN
 
-    import train
-
-    entry = train.load_entry(train.Path("configs/ppo_belief_cnn_bc.yaml"), "EKFSLAM-v0")
+    entry = settings.load_entry(Path("configs/ppo_belief_cnn_bc.yaml"), "EKFSLAM-v0")
     assert (
         entry["pretrain"]["episodes"] == 1000 and entry["env_kwargs"]["observation"]["belief_image"] is True
     )
@@ -574,10 +574,8 @@ def test_the_shipped_recipe_clones_the_frontier_planners_primitives_at_smoke_siz
     starts from the clone."""
     from ekfslam_gym.agents import PPOAgent
 
-    import train
-
     config = "configs/ppo_frontier_primitives_bc.yaml"
-    entry = train.load_entry(train.Path(config), "EKFSLAM-v0")
+    entry = settings.load_entry(Path(config), "EKFSLAM-v0")
     assert (
         entry["pretrain"]["planner"] == "frontier" and entry["env_kwargs"]["action"]["kind"] == "primitives"
     )
@@ -600,9 +598,7 @@ def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
     image, cloned into the Gaussian MultiInputPolicy, then PPO starts from the clone."""
     from ekfslam_gym.agents import PPOAgent
 
-    import train
-
-    entry = train.load_entry(train.Path("configs/ppo_frontier_bc.yaml"), "EKFSLAM-v0")
+    entry = settings.load_entry(Path("configs/ppo_frontier_bc.yaml"), "EKFSLAM-v0")
     assert entry["pretrain"]["planner"] == "frontier" and entry["env_kwargs"]["action"]["kind"] == "waypoint"
     out = tmp_path / "run"
     _smoke_train(
@@ -624,10 +620,8 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_im
     read: seeds 1-4 reused seed 0's)."""
     import yaml
 
-    import train
-
     def entry(name):
-        return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-v0")
+        return settings.load_entry(Path(f"configs/{name}.yaml"), "EKFSLAM-v0")
 
     base, bonus, wide, frontier = (
         entry("ppo_belief_cnn_bc"),
@@ -635,7 +629,7 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_im
         entry("ppo_belief_cnn_bc_coverage_wide"),
         entry("ppo_frontier_primitives_bc"),
     )
-    record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-v0_config.yaml").read_text())["entry"]
+    record = yaml.safe_load(Path("models/ppo_EKFSLAM-v0_config.yaml").read_text())["entry"]
     assert record["pretrain"]["path"].endswith("demonstrations.npz") and frontier["pretrain"]["path"] is None
     record["pretrain"]["path"] = None
     record["pretrain"].setdefault("planner_kwargs", None)  # recorded before the key existed
@@ -655,9 +649,8 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_im
 
 def _large_entry(name):
     """configs/<name>.yaml's EKFSLAM-Large-v0 entry, as train.py reads it."""
-    import train
 
-    return train.load_entry(train.Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
+    return settings.load_entry(Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
 
 
 def test_the_large_mlp_recipes_differ_only_where_named():
@@ -724,14 +717,12 @@ def test_the_shipped_large_model_records_the_recurrent_recipe_at_pose_variance_4
     nothing else."""
     import yaml
 
-    import train
-
     pv4, pv6, lstm_home = (
         _large_entry("ppo_lstm_primitives_home_keep_pv4_bc"),
         _large_entry("ppo_lstm_primitives_home_keep_pv6_bc"),
         _large_entry("ppo_lstm_primitives_home_keep_bc"),
     )
-    record = yaml.safe_load(train.Path("models/ppo_EKFSLAM-Large-v0_config.yaml").read_text())
+    record = yaml.safe_load(Path("models/ppo_EKFSLAM-Large-v0_config.yaml").read_text())
     assert record["env_id"] == "EKFSLAM-Large-v0" and record["entry"]["algo"] == "ppo_lstm"
     assert record["seed"] == 1
     assert pv4["pretrain"]["path"] is None

@@ -1,4 +1,4 @@
-"""Cloning kept up during PPO fine-tuning (``pretrain.keep_cloning``, ekfslam_gym.agents.keep_cloning): its settings, that its
+"""Cloning kept up during PPO fine-tuning (``pretrain.keep_cloning``, ekfslam_gym.training.keep_cloning): its settings, that its
 steps move the policy towards the demonstrated actions at the scheduled rate and reproducibly, and that train.py
 runs them between PPO's updates, resumed runs included. Learning quality on the env is never asserted."""
 
@@ -7,8 +7,9 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from ekfslam_gym.agents.imitation import behaviour_clone, fit_normalizer, validate_pretrain  # noqa: E402
-
+from ekfslam_gym.training import artefacts  # noqa: E402
+from ekfslam_gym.training.cloning import behaviour_clone, fit_normalizer  # noqa: E402
+from ekfslam_gym.training.settings import validate_pretrain  # noqa: E402
 from tests.test_imitation import LabelEnv, synthetic  # noqa: E402
 
 
@@ -40,7 +41,7 @@ def _model(seed=0):
 
 
 def _callback(model, demos, **settings):
-    from ekfslam_gym.agents.keep_cloning import KeepCloning
+    from ekfslam_gym.training.keep_cloning import KeepCloning
 
     callback = KeepCloning(demos, {"batches": 8, "learning_rate": 3.0e-3, "decay": 1.0, **settings},
                            batch_size=128, seed=0)  # fmt: skip
@@ -106,7 +107,7 @@ def test_train_py_keeps_cloning_between_ppo_updates_and_on_resume(tmp_path):
     kept = tmp_path / "kept"
     clone, final = run(kept, "{episodes: 2, epochs: 2, keep_cloning: {batches: 2, learning_rate: 1.0e-3}}")
     assert not np.allclose(clone, final)
-    recorded = train.read_run(kept)[2]["pretrain"]["keep_cloning"]
+    recorded = artefacts.read_run(kept)[2]["pretrain"]["keep_cloning"]
     assert recorded == {"batches": 2, "learning_rate": 1.0e-3, "decay": 1.0}
 
     (kept / "pretrain.json").unlink()

@@ -10,9 +10,8 @@ import pytest
 pytest.importorskip("ray")
 pytest.importorskip("stable_baselines3")
 
-from ekfslam_gym.agents import sweep  # noqa: E402
-
 from ekfslam_gym.cli import sweep as cli  # noqa: E402
+from ekfslam_gym.training import sweep  # noqa: E402
 
 TINY = ["n_steps=256", "batch_size=256", "n_epochs=1", "n_envs=2", "eval_freq=0", "checkpoint_freq=0",
         "env_kwargs={max_episode_steps: 100}"]  # fmt: skip
@@ -84,7 +83,7 @@ def test_interrupted_trial_resumes_from_its_checkpoint(finished_sweep):
     out = finished_sweep[0]
     trial_dir = out / "EKFSLAM-v0_seed1"
     (trial_dir / "result.json").unlink()  # as if the run stopped after its last checkpoint
-    _, _, entry = sweep.training.read_run(trial_dir)
+    _, _, entry = sweep.read_run(trial_dir)
     trial = sweep.Trial("EKFSLAM-v0", 1, {**entry, "n_timesteps": 2560}, out, (20000,))
     assert sweep.trial_state(trial.folder) == "resume"
     result = sweep.run_trial(trial)  # in this process: Ray only schedules run_trial

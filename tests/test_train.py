@@ -2,6 +2,7 @@
 
 import json
 import pickle
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,6 +11,7 @@ pytest.importorskip("stable_baselines3")
 
 import demo  # noqa: E402
 import train  # noqa: E402
+from ekfslam_gym.training import artefacts, settings  # noqa: E402
 
 SMOKE = ["n_steps=64", "batch_size=64", "n_envs=2", "vec_env=dummy", "eval_freq=256", "eval_episodes=1",
          "checkpoint_freq=256", "env_kwargs={max_episode_steps: 100}"]  # fmt: skip
@@ -73,6 +75,58 @@ def test_bad_command_lines_fail_clearly(tmp_path, capsys):
         train.main(["--hyperparams", "n_steps"])
 
 
+SMALL = ["n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1", "eval_episodes=1", "checkpoint_freq=0",
+        "env_kwargs={max_episode_steps: 20}"]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [("learning_rat=0.1", "unknown setting(s) ['learning_rat']"), ("n_envs=0", "n_envs must be an integer >= 1"),
+     ("policy=MlpPolizy", "policy must be one of"), ("normalize={norm_obz: true}", "normalize must be"),
+     ("learning_rate=fast", "learning_rate must be a number or lin_X"), ("eval_seed=10040", "held-out suite"),
+     ("env_kwargs={world: {n_landmark: 3}}", "env_kwargs for EKFSLAM-v0"),
+     ("policy_kwargs={activation_fn: nn.Relu}", "policy_kwargs: cannot import"),
+     ("pretrain={planner: frontier}", "pretrain.planner 'frontier' demonstrates in action.kind")],
+)  # fmt: skip
+def test_every_setting_is_checked_before_the_run_folder_exists(tmp_path, capsys, override, message):
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit):
+        train.main(
+            ["--timesteps", "32", "--out", str(out), "--no-progress", "--hyperparams", *SMALL, override]
+        )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert message in err[-1] and ": error: " in err[-1], err  # one line, after the usage
+    assert not out.exists()
+
+
+def test_training_seeds_in_the_held_out_suite_are_refused(tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        train.main(
+            ["--seed", "10000", "--timesteps", "32", "--out", str(tmp_path / "run"), "--hyperparams", *SMALL]
+        )
+    assert "seed 10000: the training envs' seeds [10000] are in the held-out suite" in capsys.readouterr().err
+
+
+def test_the_run_says_when_it_rounds_and_always_evaluates(tmp_path, capsys):
+    """--timesteps 40 with rollouts of 32 steps trains 64, and says so; eval_freq beyond the run's 64 steps still
+    leaves best_model.zip and evaluations.npz, from one evaluation at the end; eval_freq 0 says there is none."""
+    out = tmp_path / "late"
+    train.main(
+        ["--timesteps", "40", "--out", str(out), "--no-progress", "--hyperparams", *SMALL, "eval_freq=1000"]
+    )
+    err = capsys.readouterr().err
+    assert "n_steps x n_envs = 32 env steps, so this run trains to 64 steps, not 40" in err
+    assert "no evaluation fell inside the run" in err
+    assert (out / "best_model.zip").is_file() and (out / "best_model_vecnormalize.pkl").is_file()
+    with np.load(out / "evaluations.npz") as evaluations:
+        assert list(evaluations["timesteps"]) == [64]
+    train.main(["--timesteps", "32", "--out", str(tmp_path / "none"), "--no-progress", "--hyperparams", *SMALL,
+                "eval_freq=0"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert "no evaluation (eval_freq is 0)" in err and "rounds" not in err and "not 32" not in err
+    assert not (tmp_path / "none" / "best_model.zip").exists()
+
+
 def test_demo_smoke_runs_every_stage(tmp_path):
     assert demo.main(["--smoke", "--out", str(tmp_path)]) == 0
     for name in ("replay.png", "comparison.md", "comparison.png"):
@@ -84,21 +138,21 @@ def test_demo_smoke_runs_every_stage(tmp_path):
 
 
 def test_linear_schedules_in_rl_zoo_spelling():
-    rate = train.schedule("lin_3e-4")
+    rate = settings.schedule("lin_3e-4")
     assert rate(1.0) == pytest.approx(3e-4) and rate(0.5) == pytest.approx(1.5e-4) and rate(0.0) == 0.0
-    assert train.schedule(0.2) == 0.2
+    assert settings.schedule(0.2) == 0.2
 
 
 def test_config_keeps_train_settings_out_of_the_ppo_entry(tmp_path):
-    entry = train.load_entry(train.Path("configs/ppo.yaml"), "EKFSLAM-v0")
+    entry = settings.load_entry(Path("configs/ppo.yaml"), "EKFSLAM-v0")
     assert entry["vec_env"] == "dummy" and entry["eval_seed"] == 20_000  # merged from train_settings
     bad = tmp_path / "bad.yaml"
     bad.write_text("EKFSLAM-v0: {n_steps: 64, vec_env: dummy}\n")
     with pytest.raises(SystemExit, match="train_settings"):
-        train.load_entry(bad, "EKFSLAM-v0")
+        settings.load_entry(bad, "EKFSLAM-v0")
     bad.write_text("EKFSLAM-v0: {n_steps: 64}\ntrain_settings: {EKFSLAM-v0: {n_stepz: 1}}\n")
     with pytest.raises(SystemExit, match="unknown"):
-        train.load_entry(bad, "EKFSLAM-v0")
+        settings.load_entry(bad, "EKFSLAM-v0")
 
 
 def test_rl_zoo3_trains_and_enjoys_on_the_project_config(tmp_path):
@@ -156,7 +210,7 @@ def test_the_belief_cnn_config_trains_and_evaluates(tmp_path):
     assert isinstance(agent.model.policy.features_extractor, BeliefCNN)
     assert agent.model.observation_space["belief_image"].shape == (3, 16, 16)
     assert "belief_image" not in agent.vecnormalize.obs_rms  # the image is left as it is, in [0, 1]
-    record = train.read_run(out)[2]
+    record = artefacts.read_run(out)[2]
     assert record["policy_kwargs"]["features_extractor_class"] == "ekfslam_gym.agents.extractors.BeliefCNN"
     status = evaluate.main(["--agent", "ppo", "--model", str(out / "model.zip"), "--seeds", "20000",
                             "--max-episode-steps", "4", "--json", "--no-progress"])  # fmt: skip
@@ -176,7 +230,7 @@ def test_the_recurrent_config_trains_and_evaluates_with_its_lstm_state(tmp_path)
     out = tmp_path / "lstm"
     train.main(["--config", "configs/ppo_lstm.yaml", "--timesteps", "256", "--n-envs", "1", "--out", str(out),
                 "--no-progress", "--hyperparams", *TINY, "policy_kwargs={lstm_hidden_size: 16}"])  # fmt: skip
-    assert train.read_run(out)[2]["algo"] == "ppo_lstm"
+    assert artefacts.read_run(out)[2]["algo"] == "ppo_lstm"
     agent = PPOAgent(out / "model.zip")
     assert type(agent.model).__name__ == "RecurrentPPO" and agent.recurrent
     assert saved_algo(out / "model.zip") == "ppo_lstm"  # also without the record: from the saved policy class
@@ -221,10 +275,10 @@ def test_algo_settings_are_checked_and_dotted_classes_resolved(tmp_path):
     config = tmp_path / "c.yaml"
     config.write_text("EKFSLAM-v0: {n_steps: 64}\ntrain_settings: {EKFSLAM-v0: {algo: a2c}}\n")
     with pytest.raises(SystemExit, match="algo must be one of"):
-        train.load_entry(config, "EKFSLAM-v0")
-    assert train.load_entry(train.Path("configs/ppo.yaml"), "EKFSLAM-v0")["algo"] == "ppo"
-    assert train.load_entry(train.Path("configs/ppo_lstm.yaml"), "EKFSLAM-Large-v0")["algo"] == "ppo_lstm"
-    from ekfslam_gym.agents.training import resolve_policy_kwargs
+        settings.load_entry(config, "EKFSLAM-v0")
+    assert settings.load_entry(Path("configs/ppo.yaml"), "EKFSLAM-v0")["algo"] == "ppo"
+    assert settings.load_entry(Path("configs/ppo_lstm.yaml"), "EKFSLAM-Large-v0")["algo"] == "ppo_lstm"
+    from ekfslam_gym.training.settings import resolve_policy_kwargs
 
     resolved = resolve_policy_kwargs(
         {

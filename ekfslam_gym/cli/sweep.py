@@ -7,9 +7,10 @@ Usage::
 
 Each (env id, seed) trains as ``python train.py --config CONFIG --env-id ID --seed S`` would (into
 ``OUT/<env-id>_seed<S>/``) and its final model is evaluated on ``--eval-seeds`` (default the evaluation seeds
-20000-20009; the held-out suite 10000-10049 is refused: ``ekfslam_gym.seeds``). Finished trials are skipped, interrupted ones resume (see
-``ekfslam_gym.agents.sweep``). ``OUT/sweep.json`` and ``OUT/sweep.md`` hold, per env id, the IQM with its 95 % bootstrap
-CI of every metric pooled over the seeds' episodes and per seed (``ekfslam_gym.evaluation.aggregate``).
+20000-20009; the held-out suite 10000-10049 is refused: ``ekfslam_gym.seeds``). Finished trials are skipped,
+interrupted ones resume (see ``ekfslam_gym.training.sweep``). ``OUT/sweep.json`` and ``OUT/sweep.md`` hold, per
+env id, the IQM with its 95 % bootstrap CI of every metric pooled over the seeds' episodes and per seed
+(``ekfslam_gym.evaluation.aggregate``).
 Progress goes to stderr; with ``--json`` the last line of stdout is the JSON object of ``sweep.json``:
 ``{"env_ids", "seeds", "eval_seeds", "timesteps" (per env id), "wall_seconds", "trained_steps", "steps_per_second",
 "failed", "results": {env_id: {"pooled": summary, "seeds": {seed: summary}}}}`` with each summary as the
@@ -30,7 +31,7 @@ from ..evaluation.aggregate import summary
 from ..evaluation.episode_metrics import METRIC_KEYS
 from ..evaluation.report import json_safe, markdown_table
 from ..packaged import DEFAULT_CONFIG, resolve_config
-from ..seeds import HELD_OUT, SELECTION_SEEDS, check_not_held_out, held_out_overlap, span
+from ..seeds import HELD_OUT, SELECTION_SEEDS, check_not_held_out, span
 from .common import parse_seeds
 
 
@@ -98,7 +99,7 @@ def markdown(report: Mapping[str, Any]) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _build_parser()
     args = parser.parse_args(argv)
-    from ekfslam_gym.agents import sweep, training
+    from ..training import settings, sweep
 
     env_ids = [e.strip() for e in args.env_ids.split(",") if e.strip()]
     if not env_ids:
@@ -112,22 +113,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error("--workers sizes the local Ray; with --address the cluster's size decides")
     if args.workers is not None and args.workers < 1:
         parser.error("--workers must be at least 1")
-    try:
-        args.config = resolve_config(
-            args.config
-        ).resolve()  # the trials may run in other folders (Ray workers)
+    try:  # a packaged recipe by name, or a path; absolute, as the trials may run in other folders (Ray workers)
+        args.config = resolve_config(args.config).resolve()
     except FileNotFoundError as error:
         parser.error(str(error))
-    hyperparams = training.parse_hyperparams(args.hyperparams)
+    hyperparams = settings.parse_hyperparams(args.hyperparams)
 
     trials = []
     for env_id in env_ids:
-        entry = training.resolve_entry(args.config, env_id, hyperparams, timesteps=args.timesteps)
-        if int(entry["n_timesteps"]) <= 0:
-            parser.error("--timesteps must be positive")
+        entry = settings.resolve_entry(args.config, env_id, hyperparams, timesteps=args.timesteps)
+        try:  # every trial's settings, checked before any runs
+            entry = settings.validate_entry(entry, env_id)
+            for seed in args.seeds:
+                check_not_held_out(
+                    range(seed, seed + entry["n_envs"]), f"training seed {seed}: its envs' seeds"
+                )
+        except ValueError as error:
+            parser.error(f"{env_id}: {error}")
         for seed in args.seeds:
-            if held_out_overlap(range(seed, seed + int(entry["n_envs"]))):
-                parser.error(f"training seed {seed} seeds envs in the held-out suite {HELD_OUT}")
             command = ["--config", str(args.config), "--env-id", env_id, "--seed", str(seed),
                        "--out", str(args.out / f"{env_id}_seed{seed}"), "--timesteps", str(entry["n_timesteps"]),
                        *(["--hyperparams", *args.hyperparams] if args.hyperparams else [])]  # fmt: skip

@@ -1,16 +1,84 @@
-"""``ekfslam-train``: the installed twin of the repository's ``train.py`` (same options, same code,
-``ekfslam_gym.agents.training``); ``--config`` takes a packaged recipe by name (``ppo``) or a path.
+"""Train PPO on an EKFSLAM env from a config in rl-zoo3's format: ``ekfslam-train`` when installed, and the
+repository's ``train.py`` runs this too.
 
-    ekfslam-train --config ppo_primitives --env-id EKFSLAM-Loop-v0 --seed 0 --out runs/loop0
+    ekfslam-train --config ppo [--env-id ID] [--timesteps N] [--seed S] [--n-envs K]
+                  [--out DIR] [--resume DIR] [--hyperparams KEY=VALUE ...] [--no-progress]
+
+``--config`` is a path or a packaged recipe by name (``ppo``, ``ppo_primitives.yaml``, ``configs/ppo.yaml``: the
+repository's ``configs/*.yaml`` install with the package), found from any folder; the default is ``ppo``.
+
+The config's format and the settings only this trainer reads (``train_settings``: evaluation, checkpoints,
+``algo``, ``pretrain``) are described in ``ekfslam_gym.training.settings``; every setting, ``--hyperparams``
+included, is checked before the run folder is created, and a bad one ends the command with one line naming it.
+PPO collects whole rollouts of ``n_steps * n_envs`` env steps, so ``--timesteps`` is rounded up to them (the run
+says so). The run folder's files are listed below (``ekfslam_gym.training.artefacts``).
+
+``--resume DIR`` continues the run in DIR from its last checkpoint: weights, optimiser state, normalisation
+statistics, timestep counter and random state (``ekfslam_gym.training.run``).
 """
 
 from __future__ import annotations
 
+import argparse
+import sys
 from collections.abc import Sequence
+from pathlib import Path
+
+from ..packaged import DEFAULT_CONFIG, config_names, resolve_config
+from ..training import artefacts
+from ..training.artefacts import read_run
+from ..training.run import train
+from ..training.settings import SettingsError, parse_hyperparams, resolve_entry
+
+
+def build_parser() -> argparse.ArgumentParser:
+    folder = artefacts.__doc__[artefacts.__doc__.index("The folder's files") :]
+    parser = argparse.ArgumentParser(
+        description=f"{__doc__}\n{folder}", formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--config", default=DEFAULT_CONFIG,
+                        help="a training config (rl-zoo3 format): a path, or a packaged recipe by name "
+                             f"({', '.join(config_names())}); default {DEFAULT_CONFIG}")  # fmt: skip
+    parser.add_argument("--env-id", default="EKFSLAM-v0")
+    parser.add_argument("--timesteps", type=int, help="total env steps (overrides n_timesteps)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--n-envs", type=int, help="overrides n_envs")
+    parser.add_argument("--out", type=Path, help="output folder (default runs/<env-id>_seed<seed>)")
+    parser.add_argument(
+        "--resume", type=Path, help="continue the run in this folder from its last checkpoint"
+    )
+    parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",
+                        help="override entries of the config, values parsed as YAML")  # fmt: skip
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from ekfslam_gym.agents.training import main as train
-
-    train(None if argv is None else list(argv))
+    """``python train.py ...``: parse the command line and ``train``; 0 when the run is done (a bad setting
+    exits with argparse's status 2 and one line naming it)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    command = sys.argv[1:] if argv is None else list(argv)
+    if args.resume is not None:
+        try:
+            env_id, seed, entry = read_run(args.resume)
+        except FileNotFoundError as error:
+            parser.error(str(error))
+        if args.timesteps is not None:
+            entry["n_timesteps"] = args.timesteps
+        out = args.resume
+    else:
+        try:
+            args.config = resolve_config(args.config)
+        except FileNotFoundError as error:
+            parser.error(str(error))
+        env_id, seed = args.env_id, args.seed
+        entry = resolve_entry(args.config, env_id, parse_hyperparams(args.hyperparams),
+                              timesteps=args.timesteps, n_envs=args.n_envs)  # fmt: skip
+        out = args.out or Path("runs") / f"{env_id}_seed{seed}"
+    try:
+        train(env_id, seed, entry, out, resume=args.resume is not None, progress=not args.no_progress,
+              command=command)  # fmt: skip
+    except SettingsError as error:  # raised before anything is created
+        parser.error(str(error))
     return 0

@@ -1,9 +1,10 @@
-"""Training sweeps on Ray Core: one task per (env id, training seed) that trains with ``ekfslam_gym.agents.training`` and
-evaluates the final policy on evaluation seeds, each task declaring the one CPU it uses.
+"""Training sweeps on Ray Core: one task per (env id, training seed) that trains with ``ekfslam_gym.training.run``
+and evaluates the final policy on evaluation seeds, each task declaring the one CPU it uses.
 
 A trial's folder ``<out>/<env-id>_seed<S>/`` holds ``train.py``'s usual outputs plus ``result.json`` (the
-per-episode metrics of ``ekfslam_gym.evaluation.episodes``). A trial with ``result.json`` is finished and is not
-run again; one with checkpoints but no result resumes through ``train.py --resume``; anything else starts over.
+per-episode metrics of ``ekfslam_gym.evaluation.episode_metrics``). A trial with ``result.json`` is finished and
+is not run again; one with checkpoints but no result resumes (``run.resume``, as ``train.py --resume``); anything
+else starts over.
 
 The final model (``model.zip``) is evaluated, not ``best_model.zip``: the best model is chosen on the evaluation
 seeds, so scoring it on them again would flatter it. Evaluation seeds must lie outside the held-out suite
@@ -23,10 +24,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ekfslam_gym.agents.ppo import PPOAgent
+from ekfslam_gym.evaluation.report import json_safe
 from ekfslam_gym.evaluation.rollout import evaluate_agent
 from ekfslam_gym.seeds import SELECTION_SEEDS, check_not_held_out
 
-from . import training
+from .artefacts import latest_checkpoint, read_run
+from .run import resume, train
 
 RESULT_FILE = "result.json"
 # One thread per library in every task: Ray counts a task as one CPU, and a BLAS or torch pool per task would
@@ -58,7 +62,7 @@ def trial_state(folder: Path) -> str:
     """``"done"`` (``result.json`` exists), ``"resume"`` (checkpoints, no result) or ``"new"``."""
     if (folder / RESULT_FILE).is_file():
         return "done"
-    if training.latest_checkpoint(folder / "checkpoints") is not None:
+    if latest_checkpoint(folder / "checkpoints") is not None:
         return "resume"
     return "new"
 
@@ -81,27 +85,22 @@ def run_trial(trial: Trial) -> dict[str, Any]:
     torch.set_num_threads(1)
     started = time.perf_counter()
     if state == "resume":
-        before = training.latest_checkpoint(folder / "checkpoints")[1]
-        training.main(["--resume", str(folder), "--timesteps", str(int(trial.entry["n_timesteps"])),
-                       "--no-progress"])  # fmt: skip
+        before = latest_checkpoint(folder / "checkpoints")[1]
+        resume(folder, int(trial.entry["n_timesteps"]), progress=False)
     else:
         before = 0
         if (folder / "config.yaml").is_file():  # an interrupted run with no checkpoint: its logs are stale
             shutil.rmtree(folder)
-        training.train(trial.env_id, trial.seed, dict(trial.entry), folder, progress=False,
+        train(trial.env_id, trial.seed, dict(trial.entry), folder, progress=False,
                        command=list(trial.command))  # fmt: skip
     train_seconds = time.perf_counter() - started
-    timesteps = training.latest_checkpoint(folder / "checkpoints")[1]
+    timesteps = latest_checkpoint(folder / "checkpoints")[1]
 
-    from .ppo import PPOAgent
-
-    env_id, _, entry = training.read_run(folder)
+    env_id, _, entry = read_run(folder)
     started = time.perf_counter()
     # make_env hands a max_episode_steps among the training env_kwargs to gym.make as its own argument
     episodes = evaluate_agent(PPOAgent(folder / "model.zip"), env_id, trial.eval_seeds, entry["env_kwargs"],
                               label=trial.name)  # fmt: skip
-    from ekfslam_gym.evaluation.report import json_safe
-
     result = {
         "env_id": env_id,
         "seed": trial.seed,

@@ -10,8 +10,9 @@ log-likelihood of the planner's action, at the rate ``learning_rate``·``decay``
 head is left to PPO. The Adam optimiser is its own, so its moments are not mixed with PPO's gradients (a resumed
 run starts it afresh).
 
-``pretrain.keep_cloning`` in a training config switches it on (``KEEP_CLONING_DEFAULTS``); ``ekfslam_gym.agents.training``
-adds ``KeepCloning`` to the run's callbacks. stable-baselines3 and torch are imported with this module.
+``pretrain.keep_cloning`` in a training config switches it on (``settings.KEEP_CLONING_DEFAULTS``);
+``ekfslam_gym.training.run`` adds ``KeepCloning`` to the run's callbacks. The cloning step and its minibatches
+are behaviour cloning's own (``cloning.clone_step``). stable-baselines3 and torch are imported with this module.
 """
 
 from __future__ import annotations
@@ -23,28 +24,15 @@ from typing import Any
 import numpy as np
 import torch
 from stable_baselines3.common.callbacks import BaseCallback
-from stable_baselines3.common.utils import obs_as_tensor
 
-from .demonstrations import Demonstrations, load
-from .imitation import DAGGER_FILE, DEMONSTRATIONS_FILE, PairBatches, SequenceBatches
-from .ppo import is_recurrent
+from .artefacts import run_demonstrations
+from .cloning import action_labels, batcher_for, clone_step, observation_batch
+from .demonstrations import Demonstrations
 
 
 def keep_cloning_rate(settings: Mapping[str, Any], rollout: int) -> float:
     """Adam's rate for the cloning steps after the ``rollout``-th rollout (0 for the first)."""
     return float(settings["learning_rate"]) * float(settings["decay"]) ** int(rollout)
-
-
-def run_demonstrations(out: Path, pretrain: Mapping[str, Any]) -> Demonstrations:
-    """The demonstrations a run was cloned on: its DAgger set, else those it collected, else ``pretrain.path``."""
-    for candidate in (Path(out) / DAGGER_FILE, Path(out) / DEMONSTRATIONS_FILE):
-        if candidate.is_file():
-            return load(candidate)
-    if pretrain.get("path"):
-        return load(pretrain["path"])
-    raise FileNotFoundError(
-        f"{out} holds no demonstrations ({DAGGER_FILE} or {DEMONSTRATIONS_FILE}) to keep cloning"
-    )
 
 
 class KeepCloning(BaseCallback):
@@ -67,32 +55,15 @@ class KeepCloning(BaseCallback):
         self.batcher = None
 
     def _init_callback(self) -> None:
-        from gymnasium import spaces
-
         policy = self.model.policy
-        if self.demos.actions.shape[1:] != self.model.action_space.shape:
-            raise ValueError(f"demonstrated actions of shape {self.demos.actions.shape[1:]} do not fit the "
-                             f"policy's {self.model.action_space}")  # fmt: skip
-        discrete = isinstance(self.model.action_space, spaces.Discrete)
-        self.actions = self.demos.actions.astype(np.int64 if discrete else np.float32)
-        self.batcher = (SequenceBatches if is_recurrent(policy) else PairBatches)(policy, self.demos.episodes)
+        self.actions = action_labels(self.demos, self.model.action_space)
+        self.batcher = batcher_for(policy, self.demos.episodes)
         self.optimizer = torch.optim.Adam(policy.parameters(), lr=float(self.settings["learning_rate"]))
 
     def rollout_index(self) -> int:
         """The run's rollouts so far, less one: 0 at the end of the first."""
         per_rollout = int(self.model.n_steps) * int(self.model.n_envs)
         return max(self.model.num_timesteps // per_rollout - 1, 0)
-
-    def _observations(self, index: np.ndarray) -> Any:
-        observations = self.demos.observations
-        if isinstance(observations, Mapping):
-            batch = {key: value[index] for key, value in observations.items()}
-        else:
-            batch = observations[index]
-        normalizer = self.model.get_vec_normalize_env()
-        if normalizer is not None:
-            batch = normalizer.normalize_obs(batch)
-        return obs_as_tensor(batch, self.model.policy.device)
 
     def clone_steps(self) -> float:
         """The cloning steps of the current rollout; returns their mean negative log-likelihood."""
@@ -105,16 +76,12 @@ class KeepCloning(BaseCallback):
         batches = self.batcher.minibatches(np.arange(len(self.demos)), self.batch_size, rng)
         policy.set_training_mode(True)
         losses = []
+        normalizer = self.model.get_vec_normalize_env()
         for _, (batch, mask, n_seq) in zip(range(int(self.settings["batches"])), batches):
-            actions = torch.as_tensor(self.actions[batch], device=policy.device)
-            _, log_prob = self.batcher.evaluate(self._observations(batch), actions, n_seq)
-            weight = torch.as_tensor(mask, dtype=log_prob.dtype, device=policy.device)
-            loss = -(log_prob.flatten() * weight).sum() / weight.sum()
-            self.optimizer.zero_grad()
-            loss.backward()
-            torch.nn.utils.clip_grad_norm_(policy.parameters(), float(self.model.max_grad_norm))
-            self.optimizer.step()
-            losses.append(loss.item())
+            observations = observation_batch(self.demos, batch, policy, normalizer)
+            loss, _, _ = clone_step(policy, self.optimizer, self.batcher, observations, self.actions[batch], mask,
+                                    n_seq, self.model.max_grad_norm)  # fmt: skip
+            losses.append(loss)
         policy.set_training_mode(False)
         self.logger.record("keep_cloning/learning_rate", rate)
         self.logger.record("keep_cloning/nll", float(np.mean(losses)))

@@ -1,19 +1,9 @@
 """Demonstrations of a planner in a macro action interface, for behaviour cloning.
 
-A policy learns faster when a planner teaches it first (imitation, then RL; issue 8's planner-guided training).
-For the demonstrations to be imitable they must be in the policy's own interface. Two planners act in one:
-
-- ``greedy``: ``GreedyPrimitivesPlanner``, the greedy information-gain planner (``ekfslam_gym.agents.greedy``) choosing, once
-  per env step of a primitives env (``action.kind: primitives``), the index of the primitive to hold for
-  ``action.hold`` control steps, planned from the env's belief exactly as the velocity agent plans;
-- ``frontier``: nearest-frontier exploration in either interface: ``ekfslam_gym.agents.frontier.FrontierWaypointPlanner``
-  giving, once per env step of a waypoint env (``action.kind: waypoint``), the goal on its path for the env's
-  waypoint controller; ``ekfslam_gym.agents.frontier.FrontierPrimitivesPlanner`` choosing, in a primitives env, the
-  primitive whose arc ends nearest that goal.
-
-``collect`` drives the env with one and keeps the env's raw observations (before any VecNormalize), the chosen
-actions, the rewards and each reward term (``info["reward_terms"]``); ``save``/``load`` keep them as ``.npz``.
-The reward's weights change only the reward, never the trajectory, so ``reweighted`` gives the same
+The planners (``ekfslam_gym.agents.planners``) act in the policy's own interface, so their choices can be
+imitated. ``collect`` drives the env with one and keeps the env's raw observations (before any VecNormalize),
+the chosen actions, the rewards and each reward term (``info["reward_terms"]``); ``save``/``load`` keep them as
+``.npz``. The reward's weights change only the reward, never the trajectory, so ``reweighted`` gives the same
 demonstrations under another reward whose terms were recorded (a reward sweep collects them once).
 
 Seeds: demonstrations are training data, so their seeds must avoid the held-out suite and the evaluation seeds
@@ -23,7 +13,6 @@ that select models (``ekfslam_gym.seeds``); ``collect`` checks them with ``check
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -32,107 +21,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from ekfslam_gym.envs.actions import PRIMITIVES
+from ekfslam_gym.agents.planners import make_planner
 from ekfslam_gym.envs.rewards import REWARD_NAMES
 from ekfslam_gym.seeds import SELECTION_SEEDS, check_demonstration_seeds
-
-from .base import wall_scan
-from .frontier import FrontierPrimitivesPlanner, FrontierWaypointPlanner
-from .greedy import GreedyInfoGainAgent, primitive_controls
-from .greedy.grid import mark_seen, update_walls
-from .greedy.veto import WALL_JOIN, scan_geometry, to_world
-
-PLANNERS = {"greedy": ("primitives",), "frontier": ("waypoint", "primitives")}  # the interfaces each acts in
-
-
-class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
-    """The greedy planner acting in a primitives env: ``act`` returns the index (``np.int64``) of the primitive
-    it chooses, replanning every env step (one env step holds a primitive for ``action.hold`` >= the velocity
-    agent's ``replan_every`` control steps).
-
-    The velocity agent marks its coverage grid at every control step; here the control steps inside a macro
-    step are not observed, so the grid is marked at the poses the executed primitive predicts from the estimate
-    at the step's start (the planner's own rollout arc, the belief's dead reckoning), then at the new estimate
-    with the new wall scan. When every primitive is vetoed it turns in place towards the more open side, as the
-    velocity agent does.
-    """
-
-    name = "greedy-primitives"
-
-    def reset(self, env: gym.Env, seed: int | None = None) -> None:
-        super().reset(env, seed)
-        u = self.env
-        if u.config.action.kind != "primitives" or u.action_space != gym.spaces.Discrete(len(PRIMITIVES)):
-            raise ValueError(
-                f"the greedy-primitives planner needs an env with action.kind primitives, got {u.config.action.kind}"
-            )
-        if not np.array_equal(self.primitives, np.asarray(PRIMITIVES, dtype=float)):
-            raise ValueError("the planner's primitives must be the env's PRIMITIVES (an index names one)")
-        cfg = u.config
-        self._hold = int(cfg.action.hold)
-        # The arcs each primitive drives over one macro step, relative to its start (for marking the grid).
-        self._arcs = [
-            primitive_controls(v * cfg.robot.v_max, w * cfg.robot.omega_max, cfg.dt, self._hold,
-                               u.filter.motion_model, self._motion_noise)[2]
-            for v, w in self.primitives
-        ]  # fmt: skip
-        self._turn = {
-            side: PRIMITIVES.index((0.0, side)) for side in (1.0, -1.0)
-        }  # the turns in place, the way out when everything is vetoed
-        self._executed: int | None = None
-        self._start: np.ndarray | None = None
-
-    def act(self, observation: Any) -> np.int64:
-        pose = np.asarray(self.env.filter.pose, dtype=float)
-        scan = wall_scan(self.env, observation)
-        b = self._bounds
-        half_fov = 0.5 * self._fov
-        if self._executed is not None:
-            for x, y, theta in to_world(self._arcs[self._executed][1:-1], self._start):
-                mark_seen(self._seen, self._hidden, self._wall, b[0], b[1], self.cell, x, y, theta,
-                          self._max_range, half_fov)  # fmt: skip
-        update_walls(
-            self._wall, b[0], b[1], self.cell, pose[0], pose[1], pose[2], self._angles, scan,
-            self._scan_max - 1e-6, WALL_JOIN,
-        )  # fmt: skip
-        mark_seen(self._seen, self._hidden, self._wall, b[0], b[1], self.cell, pose[0], pose[1], pose[2],
-                  self._max_range, half_fov)  # fmt: skip
-        points, segments = scan_geometry(scan, self._angles, self._scan_max)
-        self._current = self._plan(pose, points, segments)
-        if self._current >= 0:
-            index = self._current
-        else:
-            left = scan[(self._angles > 0) & (self._angles < math.pi)].sum()
-            right = scan[self._angles > math.pi].sum()
-            index = self._turn[1.0 if left >= right else -1.0]
-        self._executed, self._start = index, pose
-        return np.int64(index)
-
-    def executed(self, index: int) -> None:
-        """Note that primitive ``index`` was executed instead of the planner's choice (a learner drove, the
-        planner only labels: DAgger), so the coverage grid is marked along the path actually driven and the
-        commitment bonus goes to the primitive being executed."""
-        if int(index) != self._executed:
-            self._executed = self._current = int(index)
-
-    def __repr__(self) -> str:
-        return f"GreedyPrimitivesPlanner(horizon={self.horizon})"
-
-
-def make_planner(
-    name: str, kind: str, **kwargs: Any
-) -> GreedyPrimitivesPlanner | FrontierWaypointPlanner | FrontierPrimitivesPlanner:
-    """The demonstration planner ``name`` (a key of ``PLANNERS``) for action interface ``kind``, built with
-    ``kwargs``; ValueError when the planner does not act in that interface."""
-    if name not in PLANNERS:
-        raise ValueError(f"unknown demonstration planner {name!r}; choose one of {list(PLANNERS)}")
-    if kind not in PLANNERS[name]:
-        raise ValueError(
-            f"the {name} planner demonstrates in action.kind {' or '.join(PLANNERS[name])}, not {kind!r}"
-        )
-    if name == "greedy":
-        return GreedyPrimitivesPlanner(**kwargs)
-    return FrontierWaypointPlanner(**kwargs) if kind == "waypoint" else FrontierPrimitivesPlanner(**kwargs)
 
 
 @dataclass
@@ -177,7 +68,7 @@ def collect(
 ) -> Demonstrations:
     """One episode of the planner per seed in ``env_id`` built as the trainer builds its envs
     (``gym.make(id, **env_kwargs)``, so ``max_episode_steps`` is gym.make's limit); the env must use the
-    planner's action interfaces (``PLANNERS``). Seeds are checked with ``check_demonstration_seeds``.
+    planner's action interfaces (``ekfslam_gym.agents.planners.PLANNERS``). Seeds are checked with ``check_demonstration_seeds``.
 
     With ``driver`` (an ``Agent``, e.g. the policy being cloned), the driver's actions are executed and the
     planner only labels each visited observation with its own choice: the states the learner reaches, labelled
