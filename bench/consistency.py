@@ -38,10 +38,10 @@ from scipy import stats  # noqa: E402
 from ekfslam_gym.envs.config import EnvConfig  # noqa: E402
 from ekfslam_gym.envs.presets import PRESETS  # noqa: E402
 from ekfslam_gym.filter import EKFSLAM, FilterDivergedError  # noqa: E402
+from ekfslam_gym.filter.settings import VARIANTS  # noqa: E402
 from ekfslam_gym.sim import WheelOdometryNoise, World, make_layout  # noqa: E402
 
 DRIVINGS = ("forward", "random", "spin", "held", "circle")
-VARIANTS = ("ekf", "fej", "iekf")
 MODELS = ("odometry", "wheels")
 CIRCLE_SPEED, CIRCLE_RADIUS, HOLD = 0.55, 6.5, 10
 
@@ -105,12 +105,10 @@ def simulate(config: EnvConfig, driving: str, seed: int, steps: int, wheels: Whe
 
 def pose_nees(run: Run, config: EnvConfig, model: str, variant: str, wheel_base: float) -> np.ndarray:
     """Pose NEES per step of one filter on one run (NaN from a numerical failure on)."""
-    f = config.filter
     ekf = EKFSLAM(
-        run.n_landmarks, motion_model=model, dt=config.dt, measurement_noise=config.sensor.cov,
-        landmark_prior=f.landmark_prior, pose_prior=f.pose_prior, init_mode=f.init_mode, update=f.update,
-        initial_pose=run.layout_start, min_range=max(config.sensor.min_range, 1e-3),
-        resync_every=f.resync_every, variant=variant, wheel_base=wheel_base,
+        run.n_landmarks, config.filter, motion_model=model, variant=variant, dt=config.dt,
+        measurement_noise=config.sensor.cov, initial_pose=run.layout_start,
+        min_range=max(config.sensor.min_range, 1e-3), wheel_base=wheel_base,
     )  # fmt: skip
     ekf.correct(*run.first_readings)
     nees = np.full(len(run.readings), np.nan)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from ekfslam_gym.filter import EKFSLAM, FilterDivergedError, range_bearing, wrap_angle
+from ekfslam_gym.filter import COURSE_SETTINGS, EKFSLAM, FilterDivergedError, range_bearing, wrap_angle
 from ekfslam_gym.filter.models import odometry_motion, velocity_motion
 
 from .drives import loop_drive, ring_landmarks
@@ -18,7 +18,7 @@ MEASUREMENT_COV = np.diag([0.01, 0.002])
 def make_filter(n, **kwargs):
     defaults = dict(measurement_noise=MEASUREMENT_COV, pose_prior=1e-6, initial_pose=[0.0, -4.0, 0.0])
     defaults.update(kwargs)
-    return EKFSLAM(n, **defaults)
+    return EKFSLAM(n, COURSE_SETTINGS, **defaults)
 
 
 def log_det_tolerance(reference):
@@ -51,7 +51,7 @@ def test_incremental_log_det_matches_slogdet_every_step(init_mode, update):
 
 
 def test_log_det_starts_once_sigma_is_definite_with_the_course_zero_pose_prior():
-    ekf = EKFSLAM(3)  # course: pose covariance 0, landmarks 1000 I
+    ekf = EKFSLAM(3, COURSE_SETTINGS)  # course: pose covariance 0, landmarks 1000 I
     assert ekf.log_det == -np.inf
     ekf.predict([0.1, 0.2, 0.0])
     check_bookkeeping(ekf)

@@ -45,6 +45,8 @@ ENTRY_POINTS = (
     "sweep",
     "tradeoff",
     "graph.__main__",
+    "benchmark.__main__",
+    "train",
 )
 TRAINING_ORDER = (
     "settings",

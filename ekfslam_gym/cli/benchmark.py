@@ -22,18 +22,21 @@ from typing import Any
 
 from ..benchmark import QUICK_EPISODES, markdown, run
 from ..seeds import HELD_OUT
+from .common import command_line, command_parser, json_object
 
 
 def _build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="ekfslam-benchmark",
+    parser = command_parser(
+        "benchmark",
         description=f"An agent on the held-out suite ({HELD_OUT}) of each env beside the reference rows.",
     )
     parser.add_argument("--agent", default=None,
                         help="a registered agent (ppo alone: the shipped policy of each env) or module:Class / "
                              "module:function of your own")  # fmt: skip
     parser.add_argument("--model", default=None, help="a saved model (<model>.zip with its record beside it)")
-    parser.add_argument("--agent-kwargs", type=json.loads, default=None, help="constructor arguments as JSON")
+    parser.add_argument(
+        "--agent-kwargs", type=json_object, default=None, help="constructor arguments as JSON"
+    )
     parser.add_argument("--env-ids", default=None,
                         help="comma-separated env ids; default every registered one (with --model: its record's)")  # fmt: skip
     parser.add_argument("--force", action="store_true", help="run a model on env ids other than its own")
@@ -72,6 +75,7 @@ def _factory(args: argparse.Namespace, parser: argparse.ArgumentParser) -> tuple
     return (lambda env_id: (make_agent(args.agent, **kwargs), None)), args.agent, None
 
 
+@command_line("benchmark")
 def main(argv: Sequence[str] | None = None) -> int:
     import gymnasium as gym
 

@@ -20,14 +20,21 @@ import sys
 from collections.abc import Sequence
 
 from ..evaluation.consistency import QUANTITIES, ConsistencyRun, run_consistency
-from .common import merge_env_kwargs, parse_seeds
-
-VARIANTS = ("ekf", "fej", "iekf")
+from ..filter.settings import VARIANTS
+from .common import (
+    agent_from_flags,
+    check_env_flags,
+    command_line,
+    command_parser,
+    json_object,
+    merge_env_kwargs,
+    parse_seeds,
+)
 
 
 def _build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    parser = command_parser(
+        "consistency", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument(
@@ -36,9 +43,9 @@ def _build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--filters", default="ekf", help=f"comma-separated filter variants ({', '.join(VARIANTS)})"
     )
-    parser.add_argument("--seeds", default="0-49", type=parse_seeds)
-    parser.add_argument("--steps", type=int, default=200)
-    parser.add_argument("--env-kwargs", type=json.loads, default=None, help="config overrides as JSON")
+    parser.add_argument("--seeds", default="0-49", type=parse_seeds, help="one run per seed: A-B or A,B,C")
+    parser.add_argument("--steps", type=int, default=200, help="control steps per run")
+    parser.add_argument("--env-kwargs", type=json_object, default=None, help="config overrides as JSON")
     parser.add_argument(
         "--model",
         default=None,
@@ -73,11 +80,12 @@ def plot_runs(runs: list[ConsistencyRun], path: str) -> None:
     plt.close(fig)
 
 
+@command_line("consistency")
 def main(argv: Sequence[str] | None = None) -> int:
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401  (registers the ids)
-    from ekfslam_gym.agents import AGENTS, is_agent_name, make_agent
+    from ekfslam_gym.agents import AGENTS, is_agent_name
     from ekfslam_gym.packaged import shipped_model
 
     parser = _build_parser()
@@ -95,10 +103,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.model = str(shipped_model(args.env_id))
         except ValueError as error:
             parser.error(f"--agents ppo without --model: {error}")
+    check_env_flags(parser, args.env_id, args.env_kwargs)
 
     runs = []
     for name in agents:
-        agent = make_agent(name, model_path=args.model) if name == "ppo" else make_agent(name)
+        agent = agent_from_flags(parser, name, {}, model=args.model if name == "ppo" else None)
         # A policy runs on its recorded env settings (its observation above all), as evaluate runs it; the
         # step limit is --steps and a macro action is sampled per control step.
         trained = dict(getattr(agent, "trained_env_kwargs", None) or {})

@@ -40,7 +40,17 @@ from ..evaluation.report import json_safe, markdown_table, plot_results, text_su
 from ..evaluation.rollout import evaluate_agent
 from ..evaluation.smoothing import SMOOTHER_KEYS
 from ..seeds import EVAL_SEEDS, HELD_OUT, SUITES, span, suite_name
-from .common import merge_env_kwargs, parse_seeds
+from .common import (
+    agent_from_flags,
+    check_env_flags,
+    command_line,
+    command_parser,
+    json_object,
+    merge_env_kwargs,
+    parse_seeds,
+)
+
+FORMATS = ("blocks", "table", "json")
 
 DEFAULT_ENV_ID = "EKFSLAM-v0"
 
@@ -48,8 +58,8 @@ DEFAULT_ENV_ID = "EKFSLAM-v0"
 def _build_parser() -> argparse.ArgumentParser:
     from ekfslam_gym.agents import AGENTS
 
-    parser = argparse.ArgumentParser(
-        prog="python -m ekfslam_gym.evaluate",
+    parser = command_parser(
+        "evaluate",
         description=f"Evaluate agents on a seed suite (default: the evaluation seeds {span(EVAL_SEEDS)}; the "
         f"held-out suite {HELD_OUT} by name, --seeds heldout).",
     )
@@ -69,16 +79,20 @@ def _build_parser() -> argparse.ArgumentParser:
                         help="the env; default: the one a model's training record names, else EKFSLAM-v0")  # fmt: skip
     parser.add_argument("--force", action="store_true",
                         help="evaluate a model on an --env-id other than the one it was trained on")  # fmt: skip
-    parser.add_argument("--env-kwargs", type=json.loads, default=None,
+    parser.add_argument("--env-kwargs", type=json_object, default=None,
                         help='config overrides as JSON, e.g. \'{"world": {"n_landmarks": 50}}\'; a trained policy '
                              "runs on its own training env settings (read beside the model) with these on top")  # fmt: skip
-    parser.add_argument("--agent-kwargs", type=json.loads, default=None,
+    parser.add_argument("--agent-kwargs", type=json_object, default=None,
                         help='constructor arguments per agent as JSON, e.g. \'{"circle": {"radius": 2.0}}\'')  # fmt: skip
     parser.add_argument("--seeds", type=parse_seeds, default=list(EVAL_SEEDS),
                         help=f"A-B (inclusive), A,B,C or a suite's name ({', '.join(SUITES)}); default the "
                              f"evaluation seeds {span(EVAL_SEEDS)}; heldout is {HELD_OUT}, for the final table only")  # fmt: skip
     parser.add_argument("--max-episode-steps", type=int, default=None, help="shorter episodes (smoke tests)")
-    parser.add_argument("--json", action="store_true", help="print exactly one JSON object to stdout")
+    parser.add_argument("--format", choices=FORMATS, default=None,
+                        help="what stdout shows: blocks (one per agent: IQM, CI and mean of every metric; the "
+                             "default), table (one markdown table, a row per agent) or json (exactly one JSON "
+                             "object)")  # fmt: skip
+    parser.add_argument("--json", action="store_true", help="the same as --format json")
     parser.add_argument("--gif", metavar="DIR", default=None, help="write one GIF per episode to DIR")
     parser.add_argument("--gif-stride", type=int, default=2, help="keep every n-th frame in GIFs")
     parser.add_argument("--gif-scale", type=float, default=1.0, help="resize GIF frames by this factor")
@@ -98,7 +112,7 @@ def _build_parser() -> argparse.ArgumentParser:
 
 def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tuple[str, list[Any]]]:
     """(row label, agents whose episodes form that row); several agents in a row only for pooled PPO models."""
-    from ekfslam_gym.agents import AGENTS, BASELINES, is_agent_name, make_agent
+    from ekfslam_gym.agents import AGENTS, BASELINES, is_agent_name
     from ekfslam_gym.packaged import shipped_model
 
     if args.compare:
@@ -113,10 +127,13 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
     if len(set(names)) != len(names):
         parser.error("an agent is listed twice")
     per_agent = args.agent_kwargs or {}
-    if not isinstance(per_agent, dict) or any(not isinstance(v, dict) for v in per_agent.values()):
+    if not_objects := sorted(k for k, v in per_agent.items() if not isinstance(v, dict)):
         parser.error(
-            '--agent-kwargs must be a JSON object keyed by agent name, e.g. \'{"circle": {"radius": 2}}\''
+            f"--agent-kwargs: the value of {', '.join(map(repr, not_objects))} is not a JSON object; it must "
+            'map agent names to their arguments, e.g. \'{"circle": {"radius": 2}}\''
         )
+    if not_evaluated := sorted(set(per_agent) - set(names)):
+        parser.error(f"--agent-kwargs: {not_evaluated} not among the agents evaluated, {names}")
     entries = []
     for name in names:
         kwargs = dict(per_agent.get(name, {}))
@@ -126,7 +143,7 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
                     args.model = [str(shipped_model(args.env_id or DEFAULT_ENV_ID))]
                 except ValueError as error:
                     parser.error(f"--agent ppo without --model: {error}")
-            models = [make_agent("ppo", model_path=path, **kwargs) for path in args.model]
+            models = [agent_from_flags(parser, "ppo", kwargs, model=path) for path in args.model]
             if args.per_model and len(models) > 1:
                 names = [Path(p).with_suffix("").name for p in args.model]
                 if len(set(names)) < len(names):  # e.g. every run's best_model.zip: name them by their run
@@ -135,7 +152,7 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
             else:
                 entries.append(("ppo", models))
         else:
-            entries.append((name, [make_agent(name, **kwargs)]))
+            entries.append((name, [agent_from_flags(parser, name, kwargs)]))
     return entries
 
 
@@ -159,9 +176,13 @@ def resolve_env_id(agents: Sequence[Any], env_id: str | None, force: bool = Fals
     return env_id
 
 
+@command_line("evaluate")
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _build_parser()
     args = parser.parse_args(argv)
+    if args.json and args.format not in (None, "json"):
+        parser.error(f"--json is --format json; it contradicts --format {args.format}")
+    output = "json" if args.json else args.format or "blocks"
     entries = _agent_entries(args, parser)
     if any(label.startswith("ppo") for label, _ in entries):
         import torch
@@ -172,6 +193,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.env_id = resolve_env_id([a for _, group in entries for a in group], args.env_id, args.force)
     except ValueError as error:
         parser.error(str(error))
+    check_env_flags(parser, args.env_id, args.env_kwargs)
     for _, agent_list in entries:
         for agent in agent_list:
             trained_kwargs = getattr(agent, "trained_env_kwargs", None)
@@ -221,17 +243,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.episodes_json:
         Path(args.episodes_json).write_text(json.dumps(json_safe(episodes), indent=1))
 
-    if args.json:
+    if output == "json":
         out: Any = next(iter(summaries.values())) if len(summaries) == 1 else summaries
         print(json.dumps(json_safe(out), allow_nan=False))
+    elif output == "table":
+        print(f"`{args.env_id}`, {len(args.seeds)} seeds ({args.seeds[0]}..{args.seeds[-1]})\n")
+        print(markdown_table(summaries, keys), end="")
     else:
         print(f"{args.env_id}, {len(args.seeds)} seeds ({args.seeds[0]}..{args.seeds[-1]})")
         for s in summaries.values():
             print(text_summary(s))
         print(f"pose NEES per-step 95 % bounds: [{NEES_STEP_BOUNDS[0]:.3f}, {NEES_STEP_BOUNDS[1]:.2f}]")
-        if len(summaries) > 1:
-            print()
-            print(markdown_table(summaries, keys), end="")
     return 0
 
 

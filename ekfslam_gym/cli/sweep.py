@@ -32,12 +32,12 @@ from ..evaluation.episode_metrics import METRIC_KEYS
 from ..evaluation.report import json_safe, markdown_table
 from ..packaged import DEFAULT_CONFIG, resolve_config
 from ..seeds import HELD_OUT, SELECTION_SEEDS, check_not_held_out, span
-from .common import parse_seeds
+from .common import command_line, command_parser, parse_seeds
 
 
 def _build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="python -m ekfslam_gym.sweep",
+    parser = command_parser(
+        "sweep",
         description="Train PPO over env ids x seeds on Ray (local or a cluster) and tabulate the evaluations.",
     )
     parser.add_argument("--env-ids", default="EKFSLAM-v0", help="env ids, comma-separated")
@@ -96,6 +96,7 @@ def markdown(report: Mapping[str, Any]) -> str:
     return "\n".join(parts)
 
 
+@command_line("sweep")
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _build_parser()
     args = parser.parse_args(argv)

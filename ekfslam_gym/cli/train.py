@@ -29,12 +29,13 @@ from ..training import artefacts
 from ..training.artefacts import read_run
 from ..training.run import train
 from ..training.settings import SettingsError, parse_hyperparams, resolve_entry
+from .common import command_parser
 
 
 def build_parser() -> argparse.ArgumentParser:
     folder = artefacts.__doc__[artefacts.__doc__.index("The folder's files") :]
-    parser = argparse.ArgumentParser(
-        description=f"{__doc__}\n{folder}", formatter_class=argparse.RawDescriptionHelpFormatter
+    parser = command_parser(
+        "train", description=f"{__doc__}\n{folder}", formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--config", default=DEFAULT_CONFIG,
                         help="a training config (rl-zoo3 format): a path, or a packaged recipe by name "
@@ -55,7 +56,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python train.py ...``: parse the command line and ``train``; 0 when the run is done (a bad setting
-    exits with argparse's status 2 and one line naming it)."""
+    exits with argparse's status 2 and one line naming it). Errors from inside the run are raised as they are;
+    ``command_line("train")(main)`` turns them into one line too, as ``train.py`` runs it."""
     parser = build_parser()
     args = parser.parse_args(argv)
     command = sys.argv[1:] if argv is None else list(argv)
