@@ -42,8 +42,8 @@ def resolve_config(name_or_path: str | Path) -> Path:
         if packaged.is_file():
             return packaged
     raise FileNotFoundError(
-        f"config {str(name_or_path)!r} does not exist (neither a file nor a packaged recipe); packaged recipes: "
-        f"{', '.join(config_names())}"
+        f"config {name_or_path} does not exist (neither a file nor a packaged recipe; packaged recipes: "
+        f"{', '.join(config_names())})"
     )
 
 

@@ -41,7 +41,7 @@ def test_an_unknown_config_names_the_packaged_recipes(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with pytest.raises(
         FileNotFoundError,
-        match=r"does not exist \(neither a file nor a packaged recipe\); packaged recipes: ppo, ",
+        match=r"config nope does not exist \(neither a file nor a packaged recipe; packaged recipes: ppo, ",
     ):
         packaged.resolve_config("nope")
     with pytest.raises(FileNotFoundError):  # a folder other than configs/ is a path, never a recipe name
@@ -149,7 +149,7 @@ def test_the_training_commands_name_the_packaged_recipes(command, tmp_path, monk
             ["--config", "nope", "--seeds", "0"][: 2 if "train" in command else 4]
         )
     assert (
-        "config 'nope' does not exist (neither a file nor a packaged recipe); packaged recipes: ppo,"
+        "config nope does not exist (neither a file nor a packaged recipe; packaged recipes: ppo,"
         in capsys.readouterr().err
     )
 
