@@ -56,14 +56,24 @@ class BuildKernels(build_ext):
             )
 
 
+# The repository's top-level folders that install inside the package (the project's layout keeps them at the top):
+# the agents, the shipped policies and the training recipes with the env presets. configs/experiments/ stays out
+# (its recipes are the record of past experiments, not the package's); the data files themselves are listed as
+# package data in pyproject.toml and read through importlib.resources (ekfslam_gym.packaged).
+MAPPED = {
+    "ekfslam_gym.agents": "agents",
+    "ekfslam_gym.models": "models",
+    "ekfslam_gym.configs": "configs",
+    "ekfslam_gym.configs.env": "configs/env",
+}
+
+
 def _packages() -> tuple[list[str], dict[str, str]]:
-    """The packages and their folders. The repository keeps the agents in its top-level ``agents/`` folder (the
-    project's layout); they install as ``ekfslam_gym.agents``, so a user's own ``agents`` module never clashes."""
+    """The packages and their folders. The agents install as ``ekfslam_gym.agents``, so a user's own ``agents``
+    module never clashes; ``models/`` and ``configs/`` travel with the package as its data."""
     packages = find_packages(where=str(ROOT), include=["ekfslam_gym", "ekfslam_gym.*"])
-    agents = ["ekfslam_gym.agents"] + [
-        f"ekfslam_gym.agents.{name}" for name in find_packages(str(ROOT / "agents"))
-    ]
-    return packages + agents, {"ekfslam_gym.agents": "agents"}
+    agents = [f"ekfslam_gym.agents.{name}" for name in find_packages(str(ROOT / "agents"))]
+    return packages + list(MAPPED) + agents, dict(MAPPED)
 
 
 PACKAGES, PACKAGE_DIR = _packages()

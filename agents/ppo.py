@@ -12,7 +12,10 @@ loaded whenever the file exists (and can be required with ``require_vecnormalize
 
 The trainer also writes ``config.yaml`` (env id and config entry, with its ``env_kwargs``) beside every
 model; when it is there the agent exposes the env it was trained on (``trained_env_id``,
-``trained_env_kwargs``) so the evaluator can warn about evaluating it on a different one.
+``trained_env_kwargs``): the evaluator runs it there unless told otherwise, and ``make_env()`` builds that env.
+``load_model`` loads a saved model without importing the module its pickled ``policy_kwargs`` name (a model
+trained in a checkout names the top-level ``agents`` package, which an installed wheel does not have): the
+``policy_kwargs`` are rebuilt from the record instead.
 
 stable-baselines3 is in the ``train`` extra: it is imported only when a model is loaded.
 """
@@ -101,6 +104,58 @@ def training_record(zip_path: str | Path) -> dict[str, Any] | None:
     return record if isinstance(record, dict) else None
 
 
+# policy_kwargs entries that name a class or function, resolved from a dotted name (``resolve_policy_kwargs``).
+CLASS_KWARGS = ("features_extractor_class", "activation_fn", "optimizer_class")
+# Records written before the agents moved under the package (0.2.0) name their classes ``agents.<module>.<Class>``.
+LEGACY_PREFIX = "agents."
+
+
+def import_dotted(name: str) -> Any:
+    """The object a dotted name points at (``ekfslam_gym.agents.extractors.BeliefCNN``; ``nn.X`` is ``torch.nn.X``)."""
+    import importlib
+
+    if name.startswith("nn."):
+        name = "torch." + name
+    module, _, attribute = name.rpartition(".")
+    if not module:
+        raise ValueError(f"{name!r} is not a dotted name (module.Class)")
+    try:
+        return getattr(importlib.import_module(module), attribute)
+    except (ImportError, AttributeError) as error:
+        raise ValueError(f"cannot import {name!r}: {error}") from None
+
+
+def resolve_policy_kwargs(kwargs: dict[str, Any] | None) -> dict[str, Any] | None:
+    """``policy_kwargs`` with the class names of ``CLASS_KWARGS`` given as dotted strings imported (the trainer
+    builds a policy with them, and ``load_model`` rebuilds a saved one's)."""
+    if kwargs is None:
+        return None
+    return {k: import_dotted(v) if k in CLASS_KWARGS and isinstance(v, str) else v for k, v in kwargs.items()}
+
+
+def load_model(path: str | Path, *, device: str = "cpu", algo: str | None = None) -> Any:
+    """The SB3 model saved at ``path`` (``<model>.zip``, with or without ``.zip``), its ``policy_kwargs`` rebuilt
+    from the training record beside it when there is one (so loading never imports the module the pickle
+    names). ``algo`` (``ALGOS``) defaults to the record's, else the saved policy class's."""
+    zip_path, _ = model_paths(path)
+    if not zip_path.is_file():
+        raise FileNotFoundError(f"no saved model at {zip_path}")
+    record = training_record(zip_path)
+    entry = record.get("entry") if record is not None else None
+    custom: dict[str, Any] = {}
+    if isinstance(entry, dict) and isinstance(entry.get("policy_kwargs"), dict):
+        named = {
+            key: f"ekfslam_gym.{value}"
+            if isinstance(value, str) and value.startswith(LEGACY_PREFIX)
+            else value
+            for key, value in entry["policy_kwargs"].items()
+        }
+        custom["policy_kwargs"] = resolve_policy_kwargs(named)
+    return algo_class(algo or saved_algo(zip_path, record)).load(
+        zip_path, device=device, custom_objects=custom or None
+    )
+
+
 class PPOAgent(Agent):
     """Acts with a saved SB3 PPO or RecurrentPPO policy (deterministic: the mean action), observations normalised
     as in training; a recurrent policy's LSTM state is carried across steps and reset at every episode start.
@@ -141,7 +196,7 @@ class PPOAgent(Agent):
             if not zip_path.is_file():
                 raise FileNotFoundError(f"no saved model at {zip_path}")
             record = training_record(zip_path)
-            model = algo_class(algo or saved_algo(zip_path, record)).load(zip_path, device=device)
+            model = load_model(zip_path, device=device, algo=algo)
             if stats_path.is_file():
                 vecnormalize = load_vecnormalize(stats_path)
             elif require_vecnormalize:
@@ -157,6 +212,19 @@ class PPOAgent(Agent):
         self.recurrent = is_recurrent(model.policy)
         self._state: Any = None
         self._episode_start = np.ones((1,), dtype=bool)
+
+    def make_env(self, env_kwargs: dict[str, Any] | None = None, **make_kwargs: Any) -> gym.Env:
+        """The env the policy was trained on (its record's id and settings, ``env_kwargs`` merged on top section
+        by section), for ``run_episode`` or a loop of one's own: ``obs, _ = env.reset(seed=s)``,
+        ``agent.reset(env, s)``, then ``env.step(agent.act(obs))``. ``make_kwargs`` go to
+        ``evaluation.rollout.make_env`` (``max_episode_steps``, ``render_mode``)."""
+        from ekfslam_gym.evaluation.rollout import make_env, merge_env_kwargs
+
+        if self.trained_env_id is None:
+            raise ValueError(f"{self!r} has no training record naming its env; build the env with gym.make")
+        return make_env(
+            self.trained_env_id, merge_env_kwargs(self.trained_env_kwargs, env_kwargs), **make_kwargs
+        )
 
     def reset(self, env: gym.Env, seed: int | None = None) -> None:
         super().reset(env, seed)

@@ -35,6 +35,11 @@ COMMANDS: dict[str, tuple[str, tuple[str, ...], str]] = {
         ("--agent", "--model", "--seeds", "--format", "--table"),
         "ekfslam-evaluate --agent circle,greedy --seeds 20000-20004 --format table",
     ),
+    "ekfslam-benchmark": (
+        "The standard protocol: an agent on the held-out suite of every env, beside the reference rows.",
+        ("--agent", "--model", "--env-ids", "--quick", "--out"),
+        "ekfslam-benchmark --agent frontier --env-ids EKFSLAM-v0",
+    ),
     "ekfslam-compare": (
         "Two groups of evaluated models on the same seeds: the difference of their IQMs with a paired bootstrap CI.",
         ("--a", "--b", "--key", "--metric"),

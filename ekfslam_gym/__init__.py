@@ -3,11 +3,16 @@
 Importing the package registers ``EKFSLAM-v0``, ``EKFSLAM-Loop-v0`` and ``EKFSLAM-Large-v0``; both
 ``gymnasium.make("EKFSLAM-v0")`` after ``import ekfslam_gym`` and ``gymnasium.make("ekfslam_gym:EKFSLAM-v0")``
 work.
+
+The shipped policies and any saved model's env (``ekfslam_gym.pretrained``, needs the ``train`` extra):
+``load_pretrained(env_id)``, ``make_env_for_model(path)`` and ``load_model(path)``, imported on first use.
 """
+
+from typing import Any
 
 from gymnasium.envs.registration import WrapperSpec, register, registry
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"  # the package's version (pyproject.toml reads it from here); CHANGELOG.md
 
 
 def _register() -> None:
@@ -36,3 +41,18 @@ def _register() -> None:
 
 
 _register()
+
+_LAZY = {
+    "load_pretrained": "ekfslam_gym.pretrained",
+    "make_env_for_model": "ekfslam_gym.pretrained",
+    "load_model": "ekfslam_gym.agents.ppo",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """The loaders of ``_LAZY``, imported when first used (they pull torch and stable-baselines3)."""
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'ekfslam_gym' has no attribute {name!r}")

@@ -1,12 +1,13 @@
 """The import contract: no import cycle anywhere in ``ekfslam_gym`` (the repository's ``agents/`` folder included,
 installed as ``ekfslam_gym.agents``), and layers that import only the layers below them, lowest first:
 
-    angles | compiled | ellipses | seeds
+    angles | compiled | ellipses | seeds | packaged (the shipped files, found by importlib.resources)
     sim | filter | graph
     envs | data
     evaluation
     agents
     training (itself ordered: settings, demonstrations, artefacts, cloning, keep_cloning, pretraining, run, sweep)
+    benchmark | pretrained (the protocol; the shipped policies with their envs)
     cli (the command lines and their ``python -m`` entry points)
 
 Packages on one line are independent of each other. Every ``import`` statement counts, those inside functions
@@ -25,12 +26,13 @@ ROOT = Path(__file__).resolve().parents[1]
 SOURCES = {"ekfslam_gym": ROOT / "ekfslam_gym", "ekfslam_gym.agents": ROOT / "agents"}
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("angles", "compiled", "ellipses", "seeds"),
+    ("angles", "compiled", "ellipses", "seeds", "packaged"),
     ("sim", "filter", "graph"),
     ("envs", "data"),
     ("evaluation",),
     ("agents",),
     ("training",),
+    ("benchmark", "pretrained"),
     ("cli",),
 )
 # The package itself registers the env ids (envs); the ``python -m`` entry points belong with the command lines.
@@ -43,6 +45,8 @@ ENTRY_POINTS = (
     "sweep",
     "tradeoff",
     "graph.__main__",
+    "benchmark.__main__",
+    "train",
 )
 TRAINING_ORDER = (
     "settings",

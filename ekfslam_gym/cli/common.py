@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import seeds
+from ..evaluation.rollout import merge_env_kwargs  # noqa: F401  (the command lines read it here)
 
 DEBUG_ENV = "EKFSLAM_DEBUG"
 """Set this environment variable (``EKFSLAM_DEBUG=1``) to see the traceback of an error instead of one line."""
@@ -174,22 +175,6 @@ def parse_seeds(text: str) -> list[int]:
         return seeds.parse_seeds(text)
     except ValueError as error:
         raise argparse.ArgumentTypeError(str(error)) from None
-
-
-def merge_env_kwargs(
-    trained: Mapping[str, Any] | None, overrides: Mapping[str, Any] | None
-) -> dict[str, Any]:
-    """A trained policy's recorded env settings with command-line ``--env-kwargs`` on top, section by section:
-    ``{"filter": {"variant": "fej"}}`` changes the variant and keeps the rest of the record's ``filter``."""
-    merged: dict[str, Any] = {
-        key: dict(v) if isinstance(v, Mapping) else v for key, v in (trained or {}).items()
-    }
-    for key, value in (overrides or {}).items():
-        if isinstance(value, Mapping) and isinstance(merged.get(key), Mapping):
-            merged[key] = {**merged[key], **value}
-        else:
-            merged[key] = value
-    return merged
 
 
 def check_env_flags(

@@ -37,14 +37,20 @@ def _build_parser() -> argparse.ArgumentParser:
         "consistency", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--env-id", default="EKFSLAM-v0")
-    parser.add_argument("--agents", default="random,circle", help="comma-separated agent names")
+    parser.add_argument(
+        "--agents", default="random,circle", help="comma-separated agent names (module:Class for your own)"
+    )
     parser.add_argument(
         "--filters", default="ekf", help=f"comma-separated filter variants ({', '.join(VARIANTS)})"
     )
     parser.add_argument("--seeds", default="0-49", type=parse_seeds, help="one run per seed: A-B or A,B,C")
     parser.add_argument("--steps", type=int, default=200, help="control steps per run")
     parser.add_argument("--env-kwargs", type=json_object, default=None, help="config overrides as JSON")
-    parser.add_argument("--model", default=None, help="the saved policy, for the ppo agent")
+    parser.add_argument(
+        "--model",
+        default=None,
+        help="the saved policy, for the ppo agent (default: the shipped policy of --env-id)",
+    )
     parser.add_argument("--json", action="store_true", help="one JSON object on the last line of stdout")
     parser.add_argument("--plot", default=None, metavar="FILE.png", help="the three quantities over time")
     return parser
@@ -79,20 +85,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401  (registers the ids)
-    from ekfslam_gym.agents import AGENTS
+    from ekfslam_gym.agents import AGENTS, is_agent_name
+    from ekfslam_gym.packaged import shipped_model
 
     parser = _build_parser()
     args = parser.parse_args(argv)
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
     filters = [f.strip() for f in args.filters.split(",") if f.strip()]
-    if unknown := [a for a in agents if a not in AGENTS]:
-        parser.error(f"unknown agent(s) {unknown}; choose from {sorted(AGENTS)}")
+    if unknown := [a for a in agents if not is_agent_name(a)]:
+        parser.error(f"unknown agent(s) {unknown}; choose from {sorted(AGENTS)} or give module:Class")
     if unknown := [f for f in filters if f not in VARIANTS]:
         parser.error(f"unknown filter variant(s) {unknown}; choose from {list(VARIANTS)}")
     if args.steps < 1:
         parser.error("--steps must be positive")
-    if "ppo" in agents and not args.model:
-        parser.error("the ppo agent needs --model PATH")
+    if "ppo" in agents and not args.model:  # the shipped policy of the env id
+        try:
+            args.model = str(shipped_model(args.env_id))
+        except ValueError as error:
+            parser.error(f"--agents ppo without --model: {error}")
     check_env_flags(parser, args.env_id, args.env_kwargs)
 
     runs = []

@@ -8,6 +8,14 @@ Usage::
     python -m ekfslam_gym.evaluate --compare --model models/ppo_EKFSLAM-v0.zip --table results.md --plot results.png
     python -m ekfslam_gym.evaluate --agent random,circle --seeds 0-9 --max-episode-steps 100 --gif gifs/
     python -m ekfslam_gym.evaluate --agent greedy --seeds 0-4 --export-tum tum/   # then: evo_ape tum ...
+    python -m ekfslam_gym.evaluate --agent ppo --env-id EKFSLAM-Large-v0        # the shipped Large policy
+    python -m ekfslam_gym.evaluate --agent myagents:BounceAgent,greedy          # your own agent beside greedy
+
+``--agent ppo`` without ``--model`` evaluates the shipped policy of the env id. A saved model brings its env: with
+no ``--env-id`` the evaluation runs on the env its training record names (EKFSLAM-v0 when no agent has a
+record), and an ``--env-id`` other than the record's is an error unless ``--force``; ``--env-kwargs`` go on top
+of the recorded settings (with a warning). ``--agent module:Class`` (or ``module:function``) evaluates an agent
+of your own (``docs/writing-an-agent.md``).
 
 The default seeds are the evaluation seeds (20000-20049); the held-out suite (10000-10049), for the final
 table only, is asked for by name, ``--seeds heldout`` (``ekfslam_gym.seeds``). The metrics are described in
@@ -44,6 +52,8 @@ from .common import (
 
 FORMATS = ("blocks", "table", "json")
 
+DEFAULT_ENV_ID = "EKFSLAM-v0"
+
 
 def _build_parser() -> argparse.ArgumentParser:
     from ekfslam_gym.agents import AGENTS
@@ -54,17 +64,21 @@ def _build_parser() -> argparse.ArgumentParser:
         f"held-out suite {HELD_OUT} by name, --seeds heldout).",
     )
     parser.add_argument("--agent", default=None,
-                        help=f"an agent or a comma-separated list (a comparison); one of {', '.join(AGENTS)}")  # fmt: skip
+                        help=f"an agent or a comma-separated list (a comparison); one of {', '.join(AGENTS)}, or "
+                             "module:Class (a class or factory of your own)")  # fmt: skip
     parser.add_argument("--compare", action="store_true",
                         help="compare random, circle, lawnmower, greedy (and ppo when --model is given)")  # fmt: skip
     parser.add_argument("--model", action="append", default=[],
                         help="saved PPO model (<model>.zip, statistics in <model>_vecnormalize.pkl); repeat it for "
                              "several training seeds, whose episodes are pooled into one 'ppo' row "
-                             "unless --per-model")  # fmt: skip
+                             "unless --per-model; without it, --agent ppo evaluates the shipped policy of the env id")  # fmt: skip
     parser.add_argument(
         "--per-model", action="store_true", help="one row per --model instead of pooling them"
     )
-    parser.add_argument("--env-id", default="EKFSLAM-v0")
+    parser.add_argument("--env-id", default=None,
+                        help="the env; default: the one a model's training record names, else EKFSLAM-v0")  # fmt: skip
+    parser.add_argument("--force", action="store_true",
+                        help="evaluate a model on an --env-id other than the one it was trained on")  # fmt: skip
     parser.add_argument("--env-kwargs", type=json_object, default=None,
                         help='config overrides as JSON, e.g. \'{"world": {"n_landmarks": 50}}\'; a trained policy '
                              "runs on its own training env settings (read beside the model) with these on top")  # fmt: skip
@@ -98,7 +112,8 @@ def _build_parser() -> argparse.ArgumentParser:
 
 def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tuple[str, list[Any]]]:
     """(row label, agents whose episodes form that row); several agents in a row only for pooled PPO models."""
-    from ekfslam_gym.agents import AGENTS, BASELINES
+    from ekfslam_gym.agents import AGENTS, BASELINES, is_agent_name
+    from ekfslam_gym.packaged import shipped_model
 
     if args.compare:
         names = list(BASELINES) + (["ppo"] if args.model else [])
@@ -106,9 +121,9 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
         names = [n.strip() for n in args.agent.split(",") if n.strip()]
     else:
         parser.error("give --agent NAME[,NAME...] or --compare")
-    unknown = [n for n in names if n not in AGENTS]
+    unknown = [n for n in names if not is_agent_name(n)]
     if unknown:
-        parser.error(f"unknown agent(s) {unknown}; choose from {sorted(AGENTS)}")
+        parser.error(f"unknown agent(s) {unknown}; choose from {sorted(AGENTS)} or give module:Class")
     if len(set(names)) != len(names):
         parser.error("an agent is listed twice")
     per_agent = args.agent_kwargs or {}
@@ -123,8 +138,11 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
     for name in names:
         kwargs = dict(per_agent.get(name, {}))
         if name == "ppo":
-            if not args.model:
-                parser.error("the ppo agent needs --model PATH")
+            if not args.model:  # the shipped policy of the env asked for
+                try:
+                    args.model = [str(shipped_model(args.env_id or DEFAULT_ENV_ID))]
+                except ValueError as error:
+                    parser.error(f"--agent ppo without --model: {error}")
             models = [agent_from_flags(parser, "ppo", kwargs, model=path) for path in args.model]
             if args.per_model and len(models) > 1:
                 names = [Path(p).with_suffix("").name for p in args.model]
@@ -136,6 +154,26 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
         else:
             entries.append((name, [agent_from_flags(parser, name, kwargs)]))
     return entries
+
+
+def resolve_env_id(agents: Sequence[Any], env_id: str | None, force: bool = False) -> str:
+    """The env to evaluate ``agents`` on: ``env_id`` when given, else the one their training records name (one
+    for all), else ``DEFAULT_ENV_ID``. ValueError when agents were trained on different envs and none is given,
+    or when ``env_id`` is not the one an agent was trained on and not ``force``d."""
+    trained = {a: str(a.trained_env_id) for a in agents if getattr(a, "trained_env_id", None)}
+    if env_id is None:
+        ids = sorted({t.split(":")[-1] for t in trained.values()})
+        if len(ids) > 1:
+            raise ValueError(f"the models were trained on different envs ({', '.join(ids)}); give --env-id "
+                             "(and --force to run them off their own)")  # fmt: skip
+        return ids[0] if ids else DEFAULT_ENV_ID
+    for agent, trained_id in trained.items():
+        if trained_id.split(":")[-1] != env_id.split(":")[-1]:
+            if not force:
+                raise ValueError(f"{agent!r} was trained on {trained_id}, not {env_id}: leave out --env-id to "
+                                 f"evaluate it on {trained_id}, or add --force")  # fmt: skip
+            print(f"warning: {agent!r} was trained on {trained_id}, evaluated on {env_id}", file=sys.stderr)
+    return env_id
 
 
 @command_line("evaluate")
@@ -151,16 +189,14 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         torch.set_num_threads(1)  # small MLP policies: threads only contend with the other cores' work
 
+    try:
+        args.env_id = resolve_env_id([a for _, group in entries for a in group], args.env_id, args.force)
+    except ValueError as error:
+        parser.error(str(error))
     check_env_flags(parser, args.env_id, args.env_kwargs)
     for _, agent_list in entries:
         for agent in agent_list:
-            trained_id = getattr(agent, "trained_env_id", None)
             trained_kwargs = getattr(agent, "trained_env_kwargs", None)
-            if trained_id is not None and trained_id.split(":")[-1] != args.env_id.split(":")[-1]:
-                print(
-                    f"warning: {agent!r} was trained on {trained_id}, evaluated on {args.env_id}",
-                    file=sys.stderr,
-                )
             if trained_kwargs is not None:
                 evaluated = merge_env_kwargs(trained_kwargs, args.env_kwargs)
                 if evaluated != dict(trained_kwargs):

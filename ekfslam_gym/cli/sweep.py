@@ -30,6 +30,7 @@ from typing import Any
 from ..evaluation.aggregate import summary
 from ..evaluation.episode_metrics import METRIC_KEYS
 from ..evaluation.report import json_safe, markdown_table
+from ..packaged import DEFAULT_CONFIG, resolve_config
 from ..seeds import HELD_OUT, SELECTION_SEEDS, check_not_held_out, span
 from .common import command_line, command_parser, parse_seeds
 
@@ -41,8 +42,9 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--env-ids", default="EKFSLAM-v0", help="env ids, comma-separated")
     parser.add_argument("--seeds", type=parse_seeds, required=True, help="training seeds, A-B or A,B,C")
-    parser.add_argument("--config", type=Path, default=Path("configs/ppo.yaml"),
-                        help="training config in rl-zoo3's format, as train.py's")  # fmt: skip
+    parser.add_argument("--config", default=DEFAULT_CONFIG,
+                        help="training config in rl-zoo3's format, as train.py's: a path or a packaged recipe's name "
+                             f"(default {DEFAULT_CONFIG})")  # fmt: skip
     parser.add_argument("--timesteps", type=int, help="env steps per trial (overrides n_timesteps)")
     parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",
                         help="override entries of the config, values parsed as YAML (as train.py's)")  # fmt: skip
@@ -112,8 +114,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error("--workers sizes the local Ray; with --address the cluster's size decides")
     if args.workers is not None and args.workers < 1:
         parser.error("--workers must be at least 1")
-    if not args.config.is_file():
-        parser.error(f"config file {args.config} does not exist")
+    try:  # a packaged recipe by name, or a path; absolute, as the trials may run in other folders (Ray workers)
+        args.config = resolve_config(args.config).resolve()
+    except FileNotFoundError as error:
+        parser.error(str(error))
     hyperparams = settings.parse_hyperparams(args.hyperparams)
 
     trials = []

@@ -1,7 +1,11 @@
-"""Train PPO on an EKFSLAM env from a config in rl-zoo3's format (the repository's ``train.py`` runs this).
+"""Train PPO on an EKFSLAM env from a config in rl-zoo3's format: ``ekfslam-train`` when installed, and the
+repository's ``train.py`` runs this too.
 
-    python train.py --config configs/ppo.yaml [--env-id ID] [--timesteps N] [--seed S] [--n-envs K]
-                    [--out DIR] [--resume DIR] [--hyperparams KEY=VALUE ...] [--no-progress]
+    ekfslam-train --config ppo [--env-id ID] [--timesteps N] [--seed S] [--n-envs K]
+                  [--out DIR] [--resume DIR] [--hyperparams KEY=VALUE ...] [--no-progress]
+
+``--config`` is a path or a packaged recipe by name (``ppo``, ``ppo_primitives.yaml``, ``configs/ppo.yaml``: the
+repository's ``configs/*.yaml`` install with the package), found from any folder; the default is ``ppo``.
 
 The config's format and the settings only this trainer reads (``train_settings``: evaluation, checkpoints,
 ``algo``, ``pretrain``) are described in ``ekfslam_gym.training.settings``; every setting, ``--hyperparams``
@@ -20,6 +24,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from ..packaged import DEFAULT_CONFIG, config_names, resolve_config
 from ..training import artefacts
 from ..training.artefacts import read_run
 from ..training.run import train
@@ -32,7 +37,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = command_parser(
         "train", description=f"{__doc__}\n{folder}", formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--config", type=Path, default=Path("configs/ppo.yaml"))
+    parser.add_argument("--config", default=DEFAULT_CONFIG,
+                        help="a training config (rl-zoo3 format): a path, or a packaged recipe by name "
+                             f"({', '.join(config_names())}); default {DEFAULT_CONFIG}")  # fmt: skip
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument("--timesteps", type=int, help="total env steps (overrides n_timesteps)")
     parser.add_argument("--seed", type=int, default=0)
@@ -63,8 +70,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             entry["n_timesteps"] = args.timesteps
         out = args.resume
     else:
-        if not args.config.is_file():
-            parser.error(f"config file {args.config} does not exist")
+        try:
+            args.config = resolve_config(args.config)
+        except FileNotFoundError as error:
+            parser.error(str(error))
         env_id, seed = args.env_id, args.seed
         entry = resolve_entry(args.config, env_id, parse_hyperparams(args.hyperparams),
                               timesteps=args.timesteps, n_envs=args.n_envs)  # fmt: skip

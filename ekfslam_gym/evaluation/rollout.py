@@ -53,6 +53,22 @@ def make_env(
     return gym.make(env_id, max_episode_steps=limit, **kwargs)
 
 
+def merge_env_kwargs(
+    trained: Mapping[str, Any] | None, overrides: Mapping[str, Any] | None
+) -> dict[str, Any]:
+    """A trained policy's recorded env settings with command-line ``--env-kwargs`` on top, section by section:
+    ``{"filter": {"variant": "fej"}}`` changes the variant and keeps the rest of the record's ``filter``."""
+    merged: dict[str, Any] = {
+        key: dict(v) if isinstance(v, Mapping) else v for key, v in (trained or {}).items()
+    }
+    for key, value in (overrides or {}).items():
+        if isinstance(value, Mapping) and isinstance(merged.get(key), Mapping):
+            merged[key] = {**merged[key], **value}
+        else:
+            merged[key] = value
+    return merged
+
+
 def run_episode(
     env: gym.Env,
     agent: Any,

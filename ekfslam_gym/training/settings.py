@@ -26,7 +26,12 @@ from typing import Any
 import yaml
 
 from ekfslam_gym.agents.planners import PLANNERS, make_planner
-from ekfslam_gym.agents.ppo import ALGOS, algo_class
+from ekfslam_gym.agents.ppo import (  # noqa: F401  (resolve_policy_kwargs: where training reads it)
+    ALGOS,
+    CLASS_KWARGS,
+    algo_class,
+    resolve_policy_kwargs,
+)
 from ekfslam_gym.seeds import (
     DEMONSTRATION_SEED_START,
     EVAL_SEED_START,
@@ -45,8 +50,6 @@ SETTINGS_SECTION = "train_settings"
 SETTINGS_KEYS = {
     "vec_env", "eval_freq", "eval_episodes", "eval_seed", "checkpoint_freq", "torch_threads", "pretrain", "algo",
 }  # fmt: skip
-# policy_kwargs entries that name a class or function, resolved from a dotted name (``resolve_policy_kwargs``).
-CLASS_KWARGS = ("features_extractor_class", "activation_fn", "optimizer_class")
 ENTRY_DEFAULTS: dict[str, Any] = {
     "n_timesteps": 100_000,
     "policy": "MlpPolicy",
@@ -144,28 +147,6 @@ def resolve_entry(
     if n_envs is not None:
         entry["n_envs"] = n_envs
     return entry
-
-
-def import_dotted(name: str) -> Any:
-    """The object a dotted name points at (``ekfslam_gym.agents.extractors.BeliefCNN``; ``nn.X`` is ``torch.nn.X``)."""
-    import importlib
-
-    if name.startswith("nn."):
-        name = "torch." + name
-    module, _, attribute = name.rpartition(".")
-    if not module:
-        raise ValueError(f"{name!r} is not a dotted name (module.Class)")
-    try:
-        return getattr(importlib.import_module(module), attribute)
-    except (ImportError, AttributeError) as error:
-        raise ValueError(f"cannot import {name!r}: {error}") from None
-
-
-def resolve_policy_kwargs(kwargs: dict[str, Any] | None) -> dict[str, Any] | None:
-    """``policy_kwargs`` with the class names of ``CLASS_KWARGS`` given as dotted strings imported."""
-    if kwargs is None:
-        return None
-    return {k: import_dotted(v) if k in CLASS_KWARGS and isinstance(v, str) else v for k, v in kwargs.items()}
 
 
 def parse_hyperparams(pairs: list[str]) -> dict[str, Any]:

@@ -1,0 +1,74 @@
+"""Saved policies with the env they were trained on: the shipped ones in one line, and any saved model's env for
+plain stable-baselines3 use.
+
+A model saved by the trainer keeps its env id and settings in the record beside it (``<model>_config.yaml``);
+those settings (the action interface, the observation, the step limit) decide the spaces the policy was built
+for, so the env comes from the record::
+
+    import ekfslam_gym
+
+    agent = ekfslam_gym.load_pretrained("EKFSLAM-Large-v0")   # the shipped policy, an Agent
+    env = agent.make_env()                                    # its env: obs, _ = env.reset(seed=0) ...
+
+    from stable_baselines3 import PPO
+    venv = ekfslam_gym.make_env_for_model("run/model.zip")    # the record's env, VecNormalize statistics loaded
+    model = ekfslam_gym.load_model("run/model.zip")           # PPO.load, safe outside a checkout
+    action, _ = model.predict(venv.reset(), deterministic=True)
+
+Needs the ``train`` extra (stable-baselines3, torch).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from .packaged import shipped_model
+
+
+def load_pretrained(env_id: str = "EKFSLAM-v0", **agent_kwargs: Any) -> Any:
+    """The shipped policy for ``env_id`` as a ``PPOAgent`` (deterministic; ``agent_kwargs`` go to it), its
+    env settings in ``trained_env_id`` / ``trained_env_kwargs`` and its env from ``agent.make_env()``."""
+    from ekfslam_gym.agents.ppo import PPOAgent
+
+    return PPOAgent(shipped_model(env_id), **agent_kwargs)
+
+
+def model_env(path: str | Path) -> tuple[str, dict[str, Any]]:
+    """(env id, env settings) from the training record beside the saved model at ``path``; ValueError without
+    one."""
+    from ekfslam_gym.agents.ppo import model_paths, training_record
+
+    zip_path, _ = model_paths(path)
+    record = training_record(zip_path)
+    if record is None or not record.get("env_id"):
+        raise ValueError(
+            f"no training record naming the env beside {zip_path} (<model>_config.yaml or config.yaml)"
+        )
+    entry = record.get("entry")
+    env_kwargs = entry.get("env_kwargs") if isinstance(entry, Mapping) else None
+    return str(record["env_id"]), dict(env_kwargs or {})
+
+
+def make_env_for_model(
+    path: str | Path, env_kwargs: Mapping[str, Any] | None = None, *, n_envs: int = 1, seed: int | None = None
+) -> Any:
+    """A stable-baselines3 VecEnv of the env the model at ``path`` was trained on (its record's id and settings,
+    ``env_kwargs`` merged on top section by section), wrapped in its saved VecNormalize statistics, frozen
+    (no updates, rewards left raw), when the model has them: what ``model.predict`` expects to see."""
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from ekfslam_gym.agents.ppo import model_paths
+    from ekfslam_gym.evaluation.rollout import make_env, merge_env_kwargs
+
+    env_id, trained = model_env(path)
+    settings = merge_env_kwargs(trained, env_kwargs)
+    venv = make_vec_env(lambda: make_env(env_id, settings), n_envs=n_envs, seed=seed)
+    _, stats = model_paths(path)
+    if stats.is_file():
+        venv = VecNormalize.load(str(stats), venv)
+        venv.training = False
+        venv.norm_reward = False
+    return venv

@@ -1,0 +1,162 @@
+"""The shipped policies and recipes travel with the package and are found from any folder; a saved model brings
+its env (``ekfslam_gym.packaged``, ``ekfslam_gym.pretrained``, ``evaluate``'s env resolution)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import ekfslam_gym
+from ekfslam_gym import packaged
+from ekfslam_gym.cli.evaluate import resolve_env_id
+
+ROOT = Path(__file__).resolve().parent.parent
+IDS = sorted(i for i in gym.registry if i.startswith("EKFSLAM"))
+
+
+def test_every_top_level_recipe_is_packaged_and_nothing_else():
+    assert packaged.config_names() == sorted(p.stem for p in (ROOT / "configs").glob("*.yaml"))
+    assert packaged.shipped_env_ids() == IDS
+
+
+@pytest.mark.parametrize("given", ["ppo", "ppo.yaml", "configs/ppo.yaml"])
+def test_a_recipe_resolves_by_name_from_any_folder(given, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    resolved = packaged.resolve_config(given)
+    assert resolved.read_text() == (ROOT / "configs" / "ppo.yaml").read_text()
+
+
+def test_a_config_path_wins_over_a_packaged_name(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "ppo.yaml").write_text("EKFSLAM-v0: {}\n")
+    assert packaged.resolve_config("ppo.yaml") == Path("ppo.yaml")
+
+
+def test_an_unknown_config_names_the_packaged_recipes(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(
+        FileNotFoundError,
+        match=r"config nope does not exist \(neither a file nor a packaged recipe; packaged recipes: ppo, ",
+    ):
+        packaged.resolve_config("nope")
+    with pytest.raises(FileNotFoundError):  # a folder other than configs/ is a path, never a recipe name
+        packaged.resolve_config("elsewhere/ppo.yaml")
+
+
+def test_an_env_without_a_shipped_policy_is_named():
+    with pytest.raises(ValueError, match="no shipped policy for 'EKFSLAM-v9'; shipped: EKFSLAM-Large-v0"):
+        packaged.shipped_model("EKFSLAM-v9")
+
+
+class _Trained:
+    def __init__(self, env_id):
+        self.trained_env_id = env_id
+
+    def __repr__(self):
+        return f"model({self.trained_env_id})"
+
+
+def test_a_model_brings_its_env_and_a_different_one_needs_force(capsys):
+    large, loop = _Trained("EKFSLAM-Large-v0"), _Trained("EKFSLAM-Loop-v0")
+    assert resolve_env_id([large, object()], None) == "EKFSLAM-Large-v0"
+    assert resolve_env_id([object()], None) == "EKFSLAM-v0"
+    assert resolve_env_id([large], "ekfslam_gym:EKFSLAM-Large-v0") == "ekfslam_gym:EKFSLAM-Large-v0"
+    with pytest.raises(ValueError, match=r"model\(EKFSLAM-Large-v0\) was trained on EKFSLAM-Large-v0, not "
+                       r"EKFSLAM-v0: leave out --env-id .* or add --force"):  # fmt: skip
+        resolve_env_id([large], "EKFSLAM-v0")
+    with pytest.raises(ValueError, match=r"trained on different envs \(EKFSLAM-Large-v0, EKFSLAM-Loop-v0\)"):
+        resolve_env_id([large, loop], None)
+    assert resolve_env_id([large], "EKFSLAM-v0", force=True) == "EKFSLAM-v0"
+    assert "was trained on EKFSLAM-Large-v0, evaluated on EKFSLAM-v0" in capsys.readouterr().err
+
+
+def test_evaluate_without_env_id_runs_the_model_on_its_own_env(capsys):
+    from ekfslam_gym.cli.evaluate import main
+
+    model = str(ROOT / "models" / "ppo_EKFSLAM-Loop-v0.zip")
+    argv = ["--agent", "ppo", "--model", model, "--seeds", "0", "--max-episode-steps", "2", "--no-progress"]
+    assert main(argv) == 0
+    assert capsys.readouterr().out.startswith("EKFSLAM-Loop-v0, 1 seeds")
+    with pytest.raises(SystemExit):
+        main([*argv, "--env-id", "EKFSLAM-v0"])
+    assert "was trained on EKFSLAM-Loop-v0, not EKFSLAM-v0" in capsys.readouterr().err
+
+
+def test_make_env_for_model_gives_what_plain_sb3_predicts_on():
+    """The v0 policy was trained with other env settings than the id's defaults (primitives, a Dict
+    observation): the env built from its record, statistics included, is what its own agent sees."""
+    path = packaged.shipped_model("EKFSLAM-v0")
+    venv = ekfslam_gym.make_env_for_model(path, seed=3)
+    model = ekfslam_gym.load_model(path)
+    action, _ = model.predict(venv.reset(), deterministic=True)
+    _, reward, _, _ = venv.step(action)
+
+    agent = ekfslam_gym.load_pretrained("EKFSLAM-v0")
+    env = agent.make_env()
+    observation, _ = env.reset(seed=3)
+    agent.reset(env, 3)
+    assert venv.observation_space == env.observation_space
+    _, own_reward, *_ = env.step(agent.act(observation))
+    np.testing.assert_allclose(reward[0], own_reward, rtol=1e-6)  # the VecEnv's rewards are float32
+
+
+def test_loading_needs_no_top_level_agents_module(tmp_path):
+    """Outside the checkout no ``agents`` module exists: the v0 model's pickled policy_kwargs name
+    ``agents.extractors.BeliefCNN``, so loading must rebuild them from the record."""
+    code = (
+        "import sys, ekfslam_gym\n"
+        "agent = ekfslam_gym.load_pretrained('EKFSLAM-v0')\n"
+        "print(type(agent.model.policy.features_extractor).__module__)\n"
+        "print(any(m == 'agents' or m.startswith('agents.') for m in sys.modules))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, check=True
+    )
+    assert out.stdout.split() == ["ekfslam_gym.agents.extractors", "False"]
+
+
+def test_a_record_naming_the_old_agents_package_still_loads(tmp_path):
+    stem = tmp_path / "model"
+    for suffix in (".zip", "_vecnormalize.pkl"):
+        (tmp_path / f"model{suffix}").write_bytes((ROOT / "models" / f"ppo_EKFSLAM-v0{suffix}").read_bytes())
+    record = (ROOT / "models" / "ppo_EKFSLAM-v0_config.yaml").read_text()
+    Path(f"{stem}_config.yaml").write_text(
+        record.replace("ekfslam_gym.agents.extractors", "agents.extractors")
+    )
+    model = ekfslam_gym.load_model(stem)
+    assert type(model.policy.features_extractor).__module__ == "ekfslam_gym.agents.extractors"
+
+
+def test_version_is_written_once():
+    from importlib.metadata import version
+
+    assert version("ekfslam-gym") == ekfslam_gym.__version__
+    assert "version =" not in (ROOT / "pyproject.toml").read_text().split("[project]")[1].split("[")[0]
+
+
+@pytest.mark.parametrize("command", ["ekfslam_gym.cli.train", "ekfslam_gym.cli.sweep"])
+def test_the_training_commands_name_the_packaged_recipes(command, tmp_path, monkeypatch, capsys):
+    import importlib
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit):
+        importlib.import_module(command).main(
+            ["--config", "nope", "--seeds", "0"][: 2 if "train" in command else 4]
+        )
+    assert (
+        "config nope does not exist (neither a file nor a packaged recipe; packaged recipes: ppo,"
+        in capsys.readouterr().err
+    )
+
+
+def test_the_sweep_resolves_its_default_config_from_any_folder(tmp_path, monkeypatch):
+    from ekfslam_gym.cli import sweep
+
+    monkeypatch.chdir(tmp_path)
+    args = sweep._build_parser().parse_args(["--seeds", "0"])
+    assert packaged.resolve_config(args.config) == packaged.resolve_config("ppo").resolve()
