@@ -428,7 +428,9 @@ def train(
 
         callbacks.append(keep_cloning_callback(model, out, entry["pretrain"]))
     if remaining > 0:
-        model.learn(total_timesteps=remaining, callback=callbacks, progress_bar=progress,
+        # A bar redraws itself with carriage returns: only on a terminal, never into a log or a pipe.
+        bar = progress and getattr(sys.stdout, "isatty", lambda: False)()
+        model.learn(total_timesteps=remaining, callback=callbacks, progress_bar=bar,
                     reset_num_timesteps=reset, tb_log_name=entry["algo"])  # fmt: skip
     save_with_stats(model, out / "model", out)
     save_checkpoint(model, out, model.num_timesteps)
@@ -510,7 +512,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",
                         help="override entries of the config, values parsed as YAML")  # fmt: skip
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--no-progress", action="store_true", help="no progress bar (one is drawn only when stdout is a terminal)"
+    )
     return parser
 
 
