@@ -107,9 +107,13 @@ def draw(path: Path) -> Path:
                 for p, v in zip(positions, values):
                     above, below = int((v > high + pad).sum()), int((v < low - pad).sum())
                     if above:
-                        ax.annotate(f"{above}↑", (p, high + pad), ha="center", va="top", fontsize=6, color="0.3")
+                        ax.annotate(
+                            f"{above}↑", (p, high + pad), ha="center", va="top", fontsize=6, color="0.3"
+                        )
                     if below:
-                        ax.annotate(f"{below}↓", (p, low - pad), ha="center", va="bottom", fontsize=6, color="0.3")
+                        ax.annotate(
+                            f"{below}↓", (p, low - pad), ha="center", va="bottom", fontsize=6, color="0.3"
+                        )
             ax.set_xticks(positions, labels, rotation=40, fontsize=6.5)
             ax.tick_params(axis="y", labelsize=7)
             ax.set_title(f"{env_id}: {title}" if col == 0 else title, fontsize=7.5)
@@ -121,7 +125,9 @@ def draw(path: Path) -> Path:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--from-json", nargs=2, metavar=("EPISODES.json", "ENV_ID"), action="append", default=[],
                         help="first convert an evaluate --episodes-json file into docs/data/")  # fmt: skip
     parser.add_argument("--out", type=Path, default=DOCS / "comparison.png")

@@ -79,7 +79,10 @@ FIELD_NOTES: dict[str, tuple[str, str]] = {
     "filter.association": ("", "how readings find their landmarks: the sensor's ids, or from the readings"),
     "filter.gate_prob": ("", "probability of the χ² association gate"),
     "filter.new_gate_prob": ("", "outside this gate of every landmark an unmatched reading starts a new one"),
-    "filter.confirm_steps": ("steps", "a new landmark not matched again within this many is forgotten (0: never)"),
+    "filter.confirm_steps": (
+        "steps",
+        "a new landmark not matched again within this many is forgotten (0: never)",
+    ),
     "observation.kind": ("", "one flat vector, or a Dict of named parts"),
     "observation.k_nearest": ("", "landmark slots: the seen landmarks nearest the pose estimate"),
     "observation.grid": ("cells", "the coverage window: grid × grid cells around the robot"),
@@ -92,7 +95,10 @@ FIELD_NOTES: dict[str, tuple[str, str]] = {
     "observation.belief_extent": ("m", "the belief image's reach to each side"),
     "observation.last_action": ("", "adds the `last_action` key (Dict only)"),
     "action.kind": ("", "what one env step means: a velocity command, a motion primitive or a waypoint"),
-    "action.hold": ("control steps", "per env step (at most, for a waypoint); empty: 1 for velocity, else 10"),
+    "action.hold": (
+        "control steps",
+        "per env step (at most, for a waypoint); empty: 1 for velocity, else 10",
+    ),
     "action.waypoint_radius": ("m", "the reach of a waypoint goal (the action's unit)"),
     "action.guard": ("m", "primitives only: stop short of walls the scan shows (0: off)"),
     "dt": ("s", "control period"),
@@ -100,7 +106,10 @@ FIELD_NOTES: dict[str, tuple[str, str]] = {
     "max_episode_steps": ("env steps", "the step limit (truncation, and the time-left entry's horizon)"),
     "terminate_on_collision": ("", "end the episode at the first wall contact"),
     "done_std": ("m", "end the episode once every landmark's standard deviation is below this (0: never)"),
-    "loop_gap": ("steps", "a landmark re-read after at least this many steps unseen counts as a loop closure"),
+    "loop_gap": (
+        "steps",
+        "a landmark re-read after at least this many steps unseen counts as a loop closure",
+    ),
 }
 
 
@@ -148,7 +157,9 @@ def _simple_table(rule: str, header: str, body: list[str]) -> list[str]:
             rows[-1] = [_join(a, b) for a, b in zip(rows[-1], cells)]
     head = split(header)
     table = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    table += ["| " + " | ".join(_cell(re.sub(r"``([^`]+)``", r"`\1`", c)) for c in row) + " |" for row in rows]
+    table += [
+        "| " + " | ".join(_cell(re.sub(r"``([^`]+)``", r"`\1`", c)) for c in row) + " |" for row in rows
+    ]
     return ["", *table, ""]
 
 
@@ -301,7 +312,7 @@ def render_spaces() -> str:
         "## Reward",
         "",
         "The reward is the weighted sum of these terms; their weights are the `reward` config section "
-        "(`ekfslam_gym.envs.rewards.REWARD_TERMS`), and `info[\"reward_terms\"]` names each term's share:",
+        '(`ekfslam_gym.envs.rewards.REWARD_TERMS`), and `info["reward_terms"]` names each term\'s share:',
         "",
         "| term | default weight | meaning |",
         "|---|---|---|",
@@ -335,9 +346,9 @@ def render_configuration() -> str:
         GENERATED.format(source="EnvConfig"),
         "",
         "Every field of `EnvConfig`, the frozen, validated configuration an env is built with. Give any of them "
-        "to `gym.make` as a section (`gym.make(\"EKFSLAM-v0\", sensor={\"max_range\": 4.0})`), as a mapping or "
+        'to `gym.make` as a section (`gym.make("EKFSLAM-v0", sensor={"max_range": 4.0})`), as a mapping or '
         "a YAML file in `config=` (`configs/env/default.yaml` writes every field out), or in a training "
-        "config's `env_kwargs`. A bad value raises `ValueError` naming the field. \"Allowed\" is what the "
+        'config\'s `env_kwargs`. A bad value raises `ValueError` naming the field. "Allowed" is what the '
         "field's own validation accepts.",
         "",
     ]
@@ -408,7 +419,9 @@ def render_env_page(env_id: str) -> str:
     lines = [
         f"# {env_id}",
         "",
-        GENERATED.format(source=f"EKFSLAMEnv's docstring, PRESETS['{env_id}'] and models/ppo_{env_id}_config.yaml"),
+        GENERATED.format(
+            source=f"EKFSLAMEnv's docstring, PRESETS['{env_id}'] and models/ppo_{env_id}_config.yaml"
+        ),
         "",
         " ".join((described.group(1) if described else "").split()),
         "",
@@ -476,7 +489,9 @@ def outputs() -> dict[Path, Any]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--check", action="store_true", help="fail if a generated file is out of date")
     args = parser.parse_args(argv)
     stale = []

@@ -21,9 +21,9 @@ def still(env_id: str, seed: int, fraction: float, path: Path) -> Path:
     """Drive ``env_id`` with the frontier planner for ``fraction`` of its step limit and save the frame."""
     import gymnasium as gym
     import imageio.v3 as iio
+    from ekfslam_gym.agents import make_agent
 
     import ekfslam_gym  # noqa: F401  (registers the ids)
-    from ekfslam_gym.agents import make_agent
 
     env = gym.make(env_id, render_mode="rgb_array")
     agent = make_agent("frontier")
@@ -41,7 +41,9 @@ def still(env_id: str, seed: int, fraction: float, path: Path) -> Path:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--seed", type=int, default=10001)
     parser.add_argument("--steps-fraction", type=float, default=0.6)
     args = parser.parse_args(argv)

@@ -79,7 +79,8 @@ def _path_tokens(page: Path) -> set[str]:
             if token.startswith(PATH_PREFIXES) or token in TOP_FILES:
                 if not re.search(r"[<>*{]|(?<![A-Za-z])ID(?![A-Za-z])|\.\.\.", token):
                     tokens.add(token)
-    links = re.findall(r"\]\(([^)#\s]+)", page.read_text())
+    links = re.findall(r"\]\(([^)#\s]+)|<img src=\"([^\"]+)\"", page.read_text())
+    links = [link for pair in links for link in pair if link]
     if page.parent == ROOT:  # the README's links are repository paths
         tokens |= {link for link in links if not link.startswith("http")}
     return tokens
@@ -155,7 +156,9 @@ def _command_lines(page: Path) -> list[tuple[str, list[str]]]:
                 if command not in COMMANDS and not (ROOT / command).is_file():
                     continue
                 segment = re.sub(r"'[^']*'|\"[^\"]*\"", "", line[match.end() : end])
-                flags = [f.split("=")[0] for f in re.findall(r"(?<![\w-])--[a-z][a-z0-9-]*(?:=\S*)?", segment)]
+                flags = [
+                    f.split("=")[0] for f in re.findall(r"(?<![\w-])--[a-z][a-z0-9-]*(?:=\S*)?", segment)
+                ]
                 found.append((command, flags))
     return found
 
@@ -226,7 +229,9 @@ def test_the_consistency_checks_catch_what_they_are_for(tmp_path) -> None:
     assert not _importable("ekfslam_gym.envs.NoSuchThing") and _importable("ekfslam_gym.envs.EnvConfig")
     lines = _command_lines(page)
     assert ("ekfslam_gym.evaluate", ["--agent", "--no-such-flag"]) in lines
-    assert "--no-such-flag" not in _flags("ekfslam_gym.evaluate") and "--agent" in _flags("ekfslam_gym.evaluate")
+    assert "--no-such-flag" not in _flags("ekfslam_gym.evaluate") and "--agent" in _flags(
+        "ekfslam_gym.evaluate"
+    )
     assert ("train.py", ["--config", "--seed"]) in lines and "--seed" in _flags("train.py")
 
 
@@ -326,7 +331,9 @@ def test_top_level_configs_are_readable_alone(config: Path) -> None:
     for env_id, entry in raw.items():
         written = dict(entry, **(settings.get(env_id) or {}))
         resolved = _load(config, env_id)
-        assert set(resolved) <= set(written), f"{config.name} {env_id}: {set(resolved) - set(written)} unwritten"
+        assert set(resolved) <= set(written), (
+            f"{config.name} {env_id}: {set(resolved) - set(written)} unwritten"
+        )
         if resolved["pretrain"]:
             assert set(resolved["pretrain"]) <= set(written["pretrain"])
 

@@ -613,7 +613,10 @@ def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
     assert entry["pretrain"]["planner"] == "frontier" and entry["env_kwargs"]["action"]["kind"] == "waypoint"
     out = tmp_path / "run"
     _smoke_train(
-        "configs/experiments/ppo_frontier_bc.yaml", out, "{planner: frontier, episodes: 2, epochs: 2}", "waypoint"
+        "configs/experiments/ppo_frontier_bc.yaml",
+        out,
+        "{planner: frontier, episodes: 2, epochs: 2}",
+        "waypoint",
     )
     demos = demo_mod.load(out / "demonstrations.npz")
     assert demos.actions.dtype == np.float32 and demos.actions.shape == (16, 2)

@@ -76,7 +76,9 @@ def test_bad_command_lines_fail_clearly(tmp_path, capsys):
 def test_demo_smoke_runs_every_stage(tmp_path, capfd):
     assert demo.main(["--smoke", "--out", str(tmp_path)]) == 0
     printed = capfd.readouterr()
-    assert "\r" not in printed.out + printed.err  # no progress bars redrawn into a log (output is not a terminal)
+    assert (
+        "\r" not in printed.out + printed.err
+    )  # no progress bars redrawn into a log (output is not a terminal)
     for name in ("replay.png", "comparison.md", "comparison.png"):
         assert (tmp_path / name).stat().st_size > 0
     assert any((tmp_path / "gifs").glob("*.gif"))
