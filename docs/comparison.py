@@ -76,7 +76,7 @@ def draw(path: Path) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from ekfslam_gym.evaluation import metrics
+    from ekfslam_gym.evaluation.report import boxes_with_iqm
 
     envs = [(env_id, data) for env_id in ENV_IDS if (data := read(env_id)) is not None]
     figure = Figure(figsize=(3.0 * len(PANELS), 2.9 * len(envs)), layout="constrained")
@@ -89,14 +89,7 @@ def draw(path: Path) -> Path:
             values = [data[a][key][np.isfinite(data[a][key])] for a in names]
             if log:
                 values = [v[v > 0] for v in values]
-            positions = np.arange(1, len(names) + 1)
-            ax.boxplot(values, positions=positions, widths=0.6, flierprops={"markersize": 2})
-            for p, v in zip(positions, values):
-                if v.size:
-                    centre = metrics.iqm(v)
-                    lo, hi = metrics.bootstrap_ci(v)
-                    ax.errorbar([p], [centre], yerr=[[centre - lo], [hi - centre]], fmt="o", color="tab:red",
-                                markersize=3, capsize=2)  # fmt: skip
+            positions = boxes_with_iqm(ax, values, size=0.7)
             if log:
                 ax.set_yscale("log")
             else:

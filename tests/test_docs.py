@@ -362,3 +362,29 @@ def _help(script: Path) -> None:
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     module.main(["--help"])
+
+
+def test_comparison_figure_draws_from_per_episode_json(tmp_path, monkeypatch) -> None:
+    """docs/comparison.py: evaluate's --episodes-json into docs/data/ CSV, then the box plots (an outlier far
+    off is counted, not drawn to scale)."""
+    import json
+
+    import numpy as np
+
+    pytest.importorskip("matplotlib")
+    spec = importlib.util.spec_from_file_location("docs_comparison", DOCS / "comparison.py")
+    comparison = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(comparison)
+    monkeypatch.setattr(comparison, "DATA", tmp_path / "data")
+    rng = np.random.default_rng(0)
+    keys = [key for key, _, _ in comparison.PANELS]
+    episodes = {
+        name: [dict({k: float(rng.uniform(0.01, 1.0)) for k in keys}, seed=10000 + i) for i in range(8)]
+        for name in ("greedy", "frontier", "ppo[best_model]")
+    }
+    episodes["greedy"][0]["map_log_det"] = 1e6
+    (tmp_path / "episodes.json").write_text(json.dumps(episodes))
+    assert comparison.main(["--from-json", str(tmp_path / "episodes.json"), "EKFSLAM-v0", "--out",
+                            str(tmp_path / "comparison.png")]) == 0  # fmt: skip
+    assert (tmp_path / "comparison.png").stat().st_size > 0
+    assert set(comparison.read("EKFSLAM-v0")) == {"greedy", "frontier", "ppo"}
