@@ -264,7 +264,7 @@ def render_spaces() -> str:
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401
-    from ekfslam_gym.envs import REWARD_TERMS, observation
+    from ekfslam_gym.envs import REWARD_TERMS, actions, observation
     from ekfslam_gym.envs.actions import PRIMITIVES
     from ekfslam_gym.envs.config import ACTION_KINDS, DEFAULT_HOLD
 
@@ -301,6 +301,8 @@ def render_spaces() -> str:
         space = gym.make("EKFSLAM-v0", action={"kind": kind}).action_space
         lines.append(f"| `{kind}` | `{space}` | {DEFAULT_HOLD[kind]} |")
     lines += [
+        "",
+        rst_to_markdown(inspect.cleandoc(actions.__doc__ or "")),
         "",
         "The nine motion primitives of `primitives` (`ekfslam_gym.envs.actions.PRIMITIVES`: forward speed and "
         "turn rate as fractions of `robot.v_max` and `robot.omega_max`):",
