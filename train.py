@@ -57,4 +57,6 @@ __all__ = [
 ]
 
 if __name__ == "__main__":
-    main()
+    from ekfslam_gym.cli.common import command_line
+
+    command_line("train")(main)()  # bad input: one line on stderr, exit 2 (EKFSLAM_DEBUG=1: the traceback)

@@ -16,8 +16,8 @@ actions, the rewards and each reward term (``info["reward_terms"]``); ``save``/`
 The reward's weights change only the reward, never the trajectory, so ``reweighted`` gives the same
 demonstrations under another reward whose terms were recorded (a reward sweep collects them once).
 
-Seeds: demonstrations are training data, so their seeds must avoid the held-out suite (10000-10049) and the
-evaluation seeds that select models (20000 onwards by default); ``check_seeds`` says so with a clear error.
+Seeds: demonstrations are training data, so their seeds must avoid the held-out suite and the evaluation seeds
+that select models (``ekfslam_gym.seeds``); ``collect`` checks them with ``check_demonstration_seeds``.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ import numpy as np
 
 from ekfslam_gym.envs.actions import PRIMITIVES
 from ekfslam_gym.envs.rewards import REWARD_NAMES
-from ekfslam_gym.evaluation.episodes import HELD_OUT_SEEDS
+from ekfslam_gym.seeds import SELECTION_SEEDS, check_demonstration_seeds
 
 from .base import wall_scan
 from .frontier import FrontierPrimitivesPlanner, FrontierWaypointPlanner
@@ -135,19 +135,6 @@ def make_planner(
     return FrontierWaypointPlanner(**kwargs) if kind == "waypoint" else FrontierPrimitivesPlanner(**kwargs)
 
 
-def check_seeds(seeds: Iterable[int], eval_seeds: Iterable[int] = range(20000, 20010)) -> list[int]:
-    """``seeds`` as a list; ValueError if any is negative, in the held-out suite or among ``eval_seeds``."""
-    seeds = [int(s) for s in seeds]
-    forbidden = set(HELD_OUT_SEEDS) | {int(s) for s in eval_seeds}
-    bad = sorted({s for s in seeds if s < 0 or s in forbidden})
-    if bad:
-        raise ValueError(
-            f"demonstration seeds {bad[:5]}{'...' if len(bad) > 5 else ''} are negative, in the held-out suite "
-            "(10000-10049) or among the evaluation seeds; pick a training range such as 30000 onwards"
-        )
-    return seeds
-
-
 @dataclass
 class Demonstrations:
     """(observation, action) pairs of a planner, with the episode each pair came from and its reward.
@@ -155,9 +142,10 @@ class Demonstrations:
     ``observations`` is an array (N, ...) for a Box observation, a dict of them for a Dict observation (raw,
     as the env returns them); ``actions`` (N,) int64 primitive indices, or (N, 2) float32 waypoint goals;
     ``rewards`` (N,) float64, the env's reward for the step; ``episodes`` (N,) int64, the index into ``seeds``
-    of the pair's episode; ``reward_terms`` the step's weighted terms by name (``info["reward_terms"]``, the
-    terms with a non-zero weight, whose weights ``meta["reward_weights"]`` records), empty in files written
-    before they were kept.
+    of the pair's episode; ``reward_terms`` every reward term of the step by name, unweighted
+    (``info["reward_terms"]``; ``meta["reward_terms"] == "unweighted"``), and ``meta["reward_weights"]`` the
+    weights the rewards were collected under. Files written before kept only the terms with a non-zero weight,
+    weighted (no ``meta["reward_terms"]``), or none at all.
     """
 
     observations: Any
@@ -185,19 +173,19 @@ def collect(
     *,
     planner: str = "greedy",
     planner_kwargs: Mapping[str, Any] | None = None,
-    eval_seeds: Iterable[int] = range(20000, 20010),
+    eval_seeds: Iterable[int] = SELECTION_SEEDS,
     driver: Any = None,
 ) -> Demonstrations:
     """One episode of the planner per seed in ``env_id`` built as the trainer builds its envs
     (``gym.make(id, **env_kwargs)``, so ``max_episode_steps`` is gym.make's limit); the env must use the
-    planner's action interfaces (``PLANNERS``). Seeds are checked with ``check_seeds``.
+    planner's action interfaces (``PLANNERS``). Seeds are checked with ``check_demonstration_seeds``.
 
     With ``driver`` (an ``Agent``, e.g. the policy being cloned), the driver's actions are executed and the
     planner only labels each visited observation with its own choice: the states the learner reaches, labelled
     by the expert (DAgger; Ross, Gordon & Bagnell 2011). ``rewards`` are then the driven episode's."""
     import ekfslam_gym  # noqa: F401  (registers the env ids)
 
-    seeds = check_seeds(seeds, eval_seeds)
+    seeds = check_demonstration_seeds(seeds, eval_seeds)
     if not seeds:
         raise ValueError("no demonstration seeds")
     qualified = env_id if ":" in env_id else f"ekfslam_gym:{env_id}"
@@ -205,7 +193,7 @@ def collect(
     observations: list[Any] = []
     actions, rewards, episodes = [], [], []
     weights = asdict(env.unwrapped.config.reward)  # every term's weight, defaults included
-    terms: dict[str, list[float]] = {name: [] for name, weight in weights.items() if weight}
+    terms: dict[str, list[float]] = {name: [] for name in REWARD_NAMES}
     try:
         agent = make_planner(planner, env.unwrapped.config.action.kind, **dict(planner_kwargs or {}))
         for k, seed in enumerate(seeds):
@@ -224,8 +212,8 @@ def collect(
                 episodes.append(k)
                 observation, reward, terminated, truncated, info = env.step(action)
                 rewards.append(float(reward))
-                for name, values in terms.items():  # a failed filter step has reward 0 and no terms
-                    values.append(float(info["reward_terms"].get(name, 0.0)))
+                for name, values in terms.items():  # unweighted, every term
+                    values.append(float(info["reward_terms"][name]))
                 if terminated or truncated:
                     break
     finally:
@@ -237,7 +225,7 @@ def collect(
     meta = {"env_id": env_id, "env_kwargs": dict(env_kwargs or {}), "planner": planner,
             "planner_kwargs": dict(planner_kwargs or {}),
             "driver": None if driver is None else getattr(driver, "name", type(driver).__name__),
-            "reward_weights": weights}  # fmt: skip
+            "reward_weights": weights, "reward_terms": "unweighted"}  # fmt: skip
     labels = np.asarray(actions)
     labels = labels.astype(np.int64 if labels.dtype.kind in "iu" else np.float32)
     return Demonstrations(stacked, labels, np.array(rewards, dtype=np.float64),
@@ -259,26 +247,36 @@ def env_reward_weights(env_id: str, env_kwargs: Mapping[str, Any] | None = None)
 
 def reweighted(demos: Demonstrations, weights: Mapping[str, float]) -> Demonstrations:
     """``demos`` with the rewards the env would have given under ``weights`` (every term's weight by name, as
-    ``env_reward_weights``): each recorded term rescaled to its new weight and summed, in the env's order. Exact
+    ``env_reward_weights``): the sum of each recorded, unweighted term times its new weight. Exact up to rounding
     because a weight only multiplies its term and never changes the trajectory. ValueError when the new reward
-    needs a term the demonstrations did not record (its weight was 0 there, or the file predates the terms)."""
+    needs a term the demonstrations did not record (a file of the older, weighted kind whose weight for it was
+    0, or one that predates the terms)."""
     recorded = {name: float(w) for name, w in demos.meta.get("reward_weights", {}).items()}
     weights = {name: float(weights.get(name, 0.0)) for name in REWARD_NAMES}
     if recorded == weights:
         return demos
     if not recorded:
         raise ValueError("the demonstrations predate the recorded reward terms; collect them again")
-    missing = [name for name, w in weights.items() if w and name not in demos.reward_terms]
+    if demos.meta.get("reward_terms") == "unweighted":
+        terms = demos.reward_terms
+    else:  # an older file: the terms with a non-zero weight, weighted
+        terms = {
+            name: values / recorded[name] for name, values in demos.reward_terms.items() if recorded.get(name)
+        }
+    missing = [name for name, w in weights.items() if w and name not in terms]
     if missing:
         raise ValueError(
             f"the demonstrations did not record the reward terms {missing} that this run's reward weighs "
-            "(their weight was 0 when they were collected); collect them again, or collect once with every "
-            "term a reward sweep needs at a non-zero weight"
+            "(their weight was 0 when these older demonstrations were collected); collect them again"
         )
-    terms = {name: demos.reward_terms[name] * (w / recorded[name]) for name, w in weights.items() if w}
-    rewards = sum(terms.values(), np.zeros(len(demos.actions)))
-    return Demonstrations(demos.observations, demos.actions, rewards, demos.episodes, demos.seeds,
-                          {**demos.meta, "reward_weights": weights}, terms)  # fmt: skip
+    rewards = np.zeros(len(demos.actions))
+    for name, w in weights.items():
+        if w:
+            rewards = rewards + w * terms[name]
+    meta = {**demos.meta, "reward_weights": weights, "reward_terms": "unweighted"}
+    return Demonstrations(
+        demos.observations, demos.actions, rewards, demos.episodes, demos.seeds, meta, terms
+    )
 
 
 def concatenate(first: Demonstrations, second: Demonstrations) -> Demonstrations:

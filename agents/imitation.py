@@ -28,10 +28,17 @@ from typing import Any
 
 import numpy as np
 
+from ekfslam_gym.seeds import (
+    DEMONSTRATION_SEED_START,
+    EVAL_SEED_START,
+    SELECTION_EPISODES,
+    check_demonstration_seeds,
+    selection_seeds,
+)
+
 from .demonstrations import (
     PLANNERS,
     Demonstrations,
-    check_seeds,
     collect,
     concatenate,
     env_reward_weights,
@@ -45,7 +52,7 @@ PRETRAIN_DEFAULTS: dict[str, Any] = {
     "planner": "greedy",  # the demonstrator (ekfslam_gym.agents.demonstrations.PLANNERS)
     "planner_kwargs": None,  # keyword arguments of the demonstrator, e.g. {relocalize_std: 0.2} for frontier
     "episodes": 200,  # demonstration episodes, one per seed from ``seed``
-    "seed": 30000,  # first demonstration seed: a training range, clear of the held-out and evaluation seeds
+    "seed": DEMONSTRATION_SEED_START,  # first demonstration seed: a training range, clear of the held-out and evaluation seeds
     "epochs": 10,  # passes over the demonstrations
     "batch_size": 256,  # pairs per minibatch; a recurrent policy's holds whole episodes, about as many pairs
     "learning_rate": 1.0e-3,  # Adam's, for cloning only (PPO keeps its own optimiser)
@@ -113,12 +120,9 @@ def validate_pretrain(value: Any, entry: Mapping[str, Any] | None = None) -> dic
     if settings["path"] is not None and not isinstance(settings["path"], str):
         raise ValueError(f"pretrain.path must be a file name or null, got {settings['path']!r}")
     settings["keep_cloning"] = validate_keep_cloning(settings["keep_cloning"])
-    eval_seeds = range(0)
-    if entry is not None:
-        start = int(entry.get("eval_seed", 20000))
-        eval_seeds = range(start, start + int(entry.get("eval_episodes", 10)))
+    eval_seeds = range(0) if entry is None else run_selection_seeds(entry)
     try:
-        check_seeds(demonstration_seeds(settings, -1), eval_seeds)
+        check_demonstration_seeds(demonstration_seeds(settings, -1), eval_seeds)
     except ValueError as error:
         raise ValueError(f"pretrain.seed/episodes: {error}") from None
     if entry is not None and "env_kwargs" in entry:
@@ -155,6 +159,13 @@ def validate_keep_cloning(value: Any) -> dict[str, Any] | None:
     if isinstance(decay, bool) or not isinstance(decay, (int, float)) or not 0 < decay <= 1:
         raise ValueError(f"pretrain.keep_cloning.decay must be in (0, 1], got {decay!r}")
     return settings
+
+
+def run_selection_seeds(entry: Mapping[str, Any]) -> range:
+    """The evaluation seeds a run's entry selects its model on (``eval_seed`` onwards, ``eval_episodes``)."""
+    return selection_seeds(
+        entry.get("eval_seed", EVAL_SEED_START), entry.get("eval_episodes", SELECTION_EPISODES)
+    )
 
 
 def demonstration_seeds(settings: Mapping[str, Any], round_: int | None = None) -> range:
@@ -486,10 +497,8 @@ def demonstrations_for(
             raise ValueError(f"{settings['path']}: {error}") from None
         demos.meta.update(env_kwargs=env_kwargs, reweighted_from=str(settings["path"]))
         return demos
-    start = int(entry.get("eval_seed", 20000))
     demos = collect(env_id, demonstration_seeds(settings), env_kwargs, planner=settings["planner"],
-                    planner_kwargs=settings["planner_kwargs"],
-                    eval_seeds=range(start, start + int(entry.get("eval_episodes", 10))))  # fmt: skip
+                    planner_kwargs=settings["planner_kwargs"], eval_seeds=run_selection_seeds(entry))  # fmt: skip
     save(demos, Path(out) / DEMONSTRATIONS_FILE)
     return demos
 
@@ -536,13 +545,12 @@ def pretrain(model: Any, env_id: str, entry: Mapping[str, Any], out: Path) -> di
 
     reports = [clone(settings["epochs"])]
     agreement = []
-    eval_start = int(entry.get("eval_seed", 20000))
     for round_ in range(settings["dagger_rounds"]):
         tick = time.perf_counter()
         more = collect(env_id, demonstration_seeds(settings, round_), dict(entry.get("env_kwargs") or {}),
                        planner=settings["planner"], planner_kwargs=settings["planner_kwargs"],
                        driver=PPOAgent(model=model, vecnormalize=normalizer),
-                       eval_seeds=range(eval_start, eval_start + int(entry.get("eval_episodes", 10))))  # fmt: skip
+                       eval_seeds=run_selection_seeds(entry))  # fmt: skip
         collected += time.perf_counter() - tick
         # The clone drove deterministically, so its accuracy on what it reached is its agreement with the planner.
         on_policy = behaviour_clone(model, more, epochs=0, held=np.ones(len(more), dtype=bool))

@@ -7,7 +7,7 @@ run again; one with checkpoints but no result resumes through ``train.py --resum
 
 The final model (``model.zip``) is evaluated, not ``best_model.zip``: the best model is chosen on the evaluation
 seeds, so scoring it on them again would flatter it. Evaluation seeds must lie outside the held-out suite
-(README, "Evaluation": 10000-10049 are for the final table only). Ray is imported only when a sweep runs (the
+(``ekfslam_gym.seeds``: it is for the final table only). Ray is imported only when a sweep runs (the
 ``cluster`` extra); on a cluster every node needs this package installed with the ``train`` extra.
 """
 
@@ -18,28 +18,20 @@ import os
 import shutil
 import sys
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ekfslam_gym.evaluation.episodes import HELD_OUT_SEEDS, evaluate_agent
+from ekfslam_gym.evaluation.rollout import evaluate_agent
+from ekfslam_gym.seeds import SELECTION_SEEDS, check_not_held_out
 
 from . import training
-
-EVAL_SEEDS: tuple[int, ...] = tuple(range(20000, 20010))
-"""The evaluation seeds (model selection and sweeps), the ones ``train.py`` selects its best model on."""
 
 RESULT_FILE = "result.json"
 # One thread per library in every task: Ray counts a task as one CPU, and a BLAS or torch pool per task would
 # oversubscribe the node's cores.
 SINGLE_THREAD_ENV = {"OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
-
-
-def held_out_overlap(seeds: Iterable[int]) -> list[int]:
-    """The seeds of ``seeds`` that lie in the held-out suite (empty when none do)."""
-    held_out = set(HELD_OUT_SEEDS)
-    return sorted({int(s) for s in seeds} & held_out)
 
 
 @dataclass(frozen=True)
@@ -50,7 +42,7 @@ class Trial:
     seed: int
     entry: dict[str, Any] = field(hash=False, compare=False)
     out: Path
-    eval_seeds: tuple[int, ...] = EVAL_SEEDS
+    eval_seeds: tuple[int, ...] = SELECTION_SEEDS
     command: tuple[str, ...] = ()
 
     @property
@@ -82,9 +74,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
     state = trial_state(folder)
     if state == "done":
         return {**json.loads((folder / RESULT_FILE).read_text()), "trained_steps": 0, "state": state}
-    overlap = held_out_overlap(trial.eval_seeds)
-    if overlap:
-        raise ValueError(f"evaluation seeds {overlap} are in the held-out suite 10000-10049")
+    check_not_held_out(trial.eval_seeds, "evaluation seeds")
 
     import torch
 

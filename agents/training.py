@@ -51,6 +51,8 @@ from typing import Any
 
 import yaml
 
+from ekfslam_gym.seeds import EVAL_SEED_START, SELECTION_EPISODES
+
 from .imitation import validate_pretrain
 from .ppo import ALGOS, algo_class
 
@@ -96,8 +98,8 @@ def load_entry(config_path: Path, env_id: str) -> dict[str, Any]:
     entry.setdefault("normalize", False)
     entry.setdefault("env_kwargs", {})
     entry.setdefault("eval_freq", 0)
-    entry.setdefault("eval_episodes", 10)
-    entry.setdefault("eval_seed", 20_000)
+    entry.setdefault("eval_episodes", SELECTION_EPISODES)
+    entry.setdefault("eval_seed", EVAL_SEED_START)
     entry.setdefault("checkpoint_freq", 0)
     entry.setdefault("torch_threads", 1)
     entry.setdefault("pretrain", None)

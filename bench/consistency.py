@@ -1,7 +1,7 @@
 """Filter consistency under the ways a policy drives: pose ANEES per step over seeded Monte-Carlo runs.
 
     OPENBLAS_NUM_THREADS=1 python bench/consistency.py [--runs 50] [--steps 200] [--preset EKFSLAM-v0]
-        [--drivings forward,random,spin,held,circle] [--variants ekf,fej,iekf] [--models odometry,wheels]
+        [--drivings forward,random,spin,turn,held,circle] [--variants ekf,fej,iekf] [--models odometry,wheels]
         [--smoke]
 
 Each run builds the preset's layout and ``World`` and drives it the way ``EKFSLAMEnv.reset/step`` does (the
@@ -15,10 +15,7 @@ Li & Kirubarajan, *Estimation with Applications to Tracking and Navigation*, sec
 odometry model, variant): the median ANEES over the steps and the share of steps inside the bounds, plus the
 share of steps in contact with a wall and the number of filters that failed numerically.
 
-Drivings, as fractions of (v_max, omega_max), the action a policy sends: ``forward`` v ~ U[0, 1],
-omega ~ U[-1, 1] fresh every step (a fresh policy's jitter); ``random`` U[-1, 1]^2 every step; ``spin`` (0, 0.5),
-turning in place; ``held`` U[-1, 1]^2 held for 10 steps; ``circle`` v = 0.55 with omega for a 6.5 m circle (the
-blind circle of agents/baselines.py, which slides along walls where the circle meets them).
+Drivings: ``ekfslam_gym.evaluation.drivings``.
 """
 
 from __future__ import annotations
@@ -37,29 +34,12 @@ from scipy import stats  # noqa: E402
 
 from ekfslam_gym.envs.config import EnvConfig  # noqa: E402
 from ekfslam_gym.envs.presets import PRESETS  # noqa: E402
+from ekfslam_gym.evaluation.drivings import DRIVINGS, driving_actions  # noqa: E402
 from ekfslam_gym.filter import EKFSLAM, FilterDivergedError  # noqa: E402
+from ekfslam_gym.filter.settings import VARIANTS  # noqa: E402
 from ekfslam_gym.sim import WheelOdometryNoise, World, make_layout  # noqa: E402
 
-DRIVINGS = ("forward", "random", "spin", "held", "circle")
-VARIANTS = ("ekf", "fej", "iekf")
 MODELS = ("odometry", "wheels")
-CIRCLE_SPEED, CIRCLE_RADIUS, HOLD = 0.55, 6.5, 10
-
-
-def actions(driving: str, rng: np.random.Generator, steps: int, config: EnvConfig) -> np.ndarray:
-    """(steps, 2) actions in [-1, 1]^2, as a policy sends them to the env."""
-    if driving == "forward":
-        return np.column_stack([rng.uniform(0.0, 1.0, steps), rng.uniform(-1.0, 1.0, steps)])
-    if driving == "random":
-        return rng.uniform(-1.0, 1.0, (steps, 2))
-    if driving == "spin":
-        return np.tile([0.0, 0.5], (steps, 1))
-    if driving == "held":
-        return np.repeat(rng.uniform(-1.0, 1.0, (steps // HOLD + 1, 2)), HOLD, axis=0)[:steps]
-    if driving == "circle":
-        omega = CIRCLE_SPEED * config.robot.v_max / CIRCLE_RADIUS / config.robot.omega_max
-        return np.tile([CIRCLE_SPEED, omega], (steps, 1))
-    raise ValueError(f"unknown driving {driving!r}; known: {DRIVINGS}")
 
 
 @dataclass
@@ -89,9 +69,7 @@ def simulate(config: EnvConfig, driving: str, seed: int, steps: int, wheels: Whe
     run = Run(layout.start, layout.n_landmarks, (first.ids, first.z), [], {m: [] for m in MODELS},
               np.empty((steps, 3)), np.zeros(steps, dtype=bool))  # fmt: skip
     robot = config.robot
-    for t, (a0, a1) in enumerate(
-        np.clip(actions(driving, np.random.default_rng([seed, 0]), steps, config), -1, 1)
-    ):
+    for t, (a0, a1) in enumerate(driving_actions(driving, np.random.default_rng([seed, 0]), steps, robot)):
         run.contact[t] = world.step(a0 * robot.v_max, a1 * robot.omega_max)
         reading = world.odometry(odometry_rngs["odometry"])
         run.odometry["odometry"].append((reading.u, reading.cov))
@@ -105,12 +83,10 @@ def simulate(config: EnvConfig, driving: str, seed: int, steps: int, wheels: Whe
 
 def pose_nees(run: Run, config: EnvConfig, model: str, variant: str, wheel_base: float) -> np.ndarray:
     """Pose NEES per step of one filter on one run (NaN from a numerical failure on)."""
-    f = config.filter
     ekf = EKFSLAM(
-        run.n_landmarks, motion_model=model, dt=config.dt, measurement_noise=config.sensor.cov,
-        landmark_prior=f.landmark_prior, pose_prior=f.pose_prior, init_mode=f.init_mode, update=f.update,
-        initial_pose=run.layout_start, min_range=max(config.sensor.min_range, 1e-3),
-        resync_every=f.resync_every, variant=variant, wheel_base=wheel_base,
+        run.n_landmarks, config.filter, motion_model=model, variant=variant, dt=config.dt,
+        measurement_noise=config.sensor.cov, initial_pose=run.layout_start,
+        min_range=max(config.sensor.min_range, 1e-3), wheel_base=wheel_base,
     )  # fmt: skip
     ekf.correct(*run.first_readings)
     nees = np.full(len(run.readings), np.nan)

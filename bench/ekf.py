@@ -23,11 +23,10 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from numba import njit  # noqa: E402
 
-from ekfslam_gym.filter import EKFSLAM, odometry_motion, range_bearing, wrap_angle  # noqa: E402
+from ekfslam_gym.filter import COURSE_SETTINGS, EKFSLAM, odometry_motion, range_bearing, wrap_angle  # noqa: E402
 from ekfslam_gym.filter import kernels as kernels  # noqa: E402
 from ekfslam_gym.filter.codes import MODEL_ODOMETRY, VARIANT_EKF  # noqa: E402
-
-VARIANTS = ("ekf", "fej", "iekf")
+from ekfslam_gym.filter.settings import VARIANTS  # noqa: E402
 
 READINGS_PER_STEP = 4
 
@@ -96,7 +95,7 @@ def best_time(fn, budget: float, min_repeats: int = 3) -> float:
 
 
 def setup(n_landmarks: int, rng: np.random.Generator, variant: str = "ekf"):
-    ekf = EKFSLAM(n_landmarks, init_mode="inverse", pose_prior=1e-4, measurement_noise=np.diag([0.01, 0.001]),
+    ekf = EKFSLAM(n_landmarks, COURSE_SETTINGS, init_mode="inverse", pose_prior=1e-4, measurement_noise=np.diag([0.01, 0.001]),
                   resync_every=0, variant=variant)  # fmt: skip
     for start in range(0, n_landmarks, READINGS_PER_STEP):
         ids = np.arange(start, min(start + READINGS_PER_STEP, n_landmarks))

@@ -25,12 +25,13 @@ def _register() -> None:
                 entry_point="ekfslam_gym.envs.horizon:HorizonSync",
                 kwargs={"registered_limit": limit},
             )
+            # The env builds the preset itself: ``config=`` then merges onto it, ``preset=None`` replaces it.
             register(
                 id=env_id,
                 entry_point="ekfslam_gym.envs.ekfslam_env:EKFSLAMEnv",
                 max_episode_steps=limit,
                 additional_wrappers=(sync,),
-                kwargs={"config": overrides},
+                kwargs={"preset": env_id},
             )
 
 

@@ -22,11 +22,8 @@ KINDS = [
 ]
 
 
-# Every optional reward term on (``control_effort`` reads the action, which a replay gives as the inner command).
-SHAPED = {
-    "a_opt": 0.3, "e_opt": 0.2, "control_effort": 0.1, "step_cost": 0.05, "map_variance": 40.0,
-    "pose_variance": 7.0, "pose_error": 3.0, "map_accuracy": 30.0, "map_error": 5000.0, "coverage": 1.0,
-}  # fmt: skip
+# Every optional reward term on.
+SHAPED = {"step_cost": 0.05, "pose_variance": 7.0, "coverage": 1.0}
 
 
 def _actions(env: gym.Env, n: int, seed: int) -> list:

@@ -12,7 +12,7 @@ from scipy import stats
 import ekfslam_gym  # noqa: F401  (registers the env ids)
 from ekfslam_gym import compiled
 from ekfslam_gym.envs.config import EnvConfig
-from ekfslam_gym.filter import EKFSLAM
+from ekfslam_gym.filter import COURSE_SETTINGS, EKFSLAM
 from ekfslam_gym.filter.association import chi2_even_ppf, gate_table
 from ekfslam_gym.filter.models import range_bearing
 from ekfslam_gym.sim.sensor import RangeBearingSensor, SensorParams
@@ -27,7 +27,14 @@ def _reading(pose, landmark):
 def _mapped(landmarks, n_slots, heading_var=0.0, slots=None):
     """A filter at the origin that has read ``landmarks`` once, exactly, into ``slots`` (default 0, 1, ...),
     then lost heading certainty (a zero-motion prediction with heading variance ``heading_var``)."""
-    ekf = EKFSLAM(n_slots, pose_prior=1e-8, measurement_noise=Q, landmark_prior=100.0, init_mode="inverse")
+    ekf = EKFSLAM(
+        n_slots,
+        COURSE_SETTINGS,
+        pose_prior=1e-8,
+        measurement_noise=Q,
+        landmark_prior=100.0,
+        init_mode="inverse",
+    )
     slots = list(range(len(landmarks))) if slots is None else slots
     ekf.correct(slots, [_reading((0, 0, 0), lm) for lm in landmarks])
     if heading_var:
@@ -126,7 +133,7 @@ def test_gating_rejects_an_outlier_and_only_a_far_one_is_new(method):
 def test_running_log_det_stays_exact_through_association_initialisation_and_forgetting(method, variant):
     rng = np.random.default_rng(7)
     landmarks = rng.uniform(-6, 6, (12, 2))
-    ekf = EKFSLAM(14, pose_prior=1e-6, measurement_noise=Q, landmark_prior=100.0, variant=variant,
+    ekf = EKFSLAM(14, COURSE_SETTINGS, pose_prior=1e-6, measurement_noise=Q, landmark_prior=100.0, variant=variant,
                   resync_every=0)  # fmt: skip
     pose = np.zeros(3)
     forgotten = new = 0
@@ -287,7 +294,8 @@ def test_known_association_counts_nothing(sensor):
 
 
 def test_evaluation_reports_the_counts_and_scores_slots_by_the_landmark_they_hold():
-    from ekfslam_gym.evaluation.episodes import ASSOCIATION_KEYS, METRIC_KEYS, evaluate_agent
+    from ekfslam_gym.evaluation.episode_metrics import ASSOCIATION_KEYS, METRIC_KEYS
+    from ekfslam_gym.evaluation.rollout import evaluate_agent
 
     class Held:
         name = "held"

@@ -11,7 +11,7 @@ import pytest
 
 import ekfslam_gym  # noqa: F401
 from ekfslam_gym.evaluation.consistency import innovation_nis, map_nees, run_consistency
-from ekfslam_gym.filter.ekf import EKFSLAM
+from ekfslam_gym.filter import COURSE_SETTINGS, EKFSLAM
 
 
 def test_map_nees_of_a_diagonal_covariance():
@@ -29,7 +29,7 @@ def test_map_nees_of_a_diagonal_covariance():
 
 def test_nis_matches_the_dense_textbook_form():
     """nu^T (H Sigma H^T + Q)^-1 nu with H built by finite differences of the measurement function."""
-    ekf = EKFSLAM(2, init_mode="inverse", pose_prior=0.01, landmark_prior=100.0)
+    ekf = EKFSLAM(2, COURSE_SETTINGS, init_mode="inverse", pose_prior=0.01, landmark_prior=100.0)
     ekf.correct([0, 1], [[3.0, 0.4], [4.0, -0.7]])
     ekf.predict([0.1, 0.5, -0.05], control_cov=np.diag([1e-3, 4e-3, 1e-3]))
     z = np.array([[2.7, 0.45], [3.8, -0.6]])
@@ -54,7 +54,7 @@ def test_nis_matches_the_dense_textbook_form():
     S = H @ cov @ H.T + np.kron(np.eye(2), ekf.measurement_noise)
     assert value == pytest.approx(float(nu @ np.linalg.solve(S, nu)), rel=1e-6)
     # a reading of a landmark not yet in the map is not an innovation
-    fresh = EKFSLAM(2, init_mode="inverse", pose_prior=0.01)
+    fresh = EKFSLAM(2, COURSE_SETTINGS, init_mode="inverse", pose_prior=0.01)
     assert innovation_nis(fresh, np.array([1]), z[:1], fresh.measurement_noise) == (0.0, 0)
 
 

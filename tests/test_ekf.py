@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from ekfslam_gym.filter import EKFSLAM, FilterDivergedError, range_bearing, wrap_angle
+from ekfslam_gym.filter import COURSE_SETTINGS, EKFSLAM, FilterDivergedError, range_bearing, wrap_angle
 from ekfslam_gym.filter.models import odometry_motion, velocity_motion
 
 from .drives import loop_drive, ring_landmarks
@@ -18,7 +18,7 @@ MEASUREMENT_COV = np.diag([0.01, 0.002])
 def make_filter(n, **kwargs):
     defaults = dict(measurement_noise=MEASUREMENT_COV, pose_prior=1e-6, initial_pose=[0.0, -4.0, 0.0])
     defaults.update(kwargs)
-    return EKFSLAM(n, **defaults)
+    return EKFSLAM(n, COURSE_SETTINGS, **defaults)
 
 
 def log_det_tolerance(reference):
@@ -51,7 +51,7 @@ def test_incremental_log_det_matches_slogdet_every_step(init_mode, update):
 
 
 def test_log_det_starts_once_sigma_is_definite_with_the_course_zero_pose_prior():
-    ekf = EKFSLAM(3)  # course: pose covariance 0, landmarks 1000 I
+    ekf = EKFSLAM(3, COURSE_SETTINGS)  # course: pose covariance 0, landmarks 1000 I
     assert ekf.log_det == -np.inf
     ekf.predict([0.1, 0.2, 0.0])
     check_bookkeeping(ekf)
@@ -305,3 +305,62 @@ def test_update_refuses_arrays_it_would_have_to_convert():
             ekf.update(*bad)
     with pytest.raises(ValueError, match="landmark ids"):
         ekf.update(control, CONTROL_COV, np.array([7], dtype=np.int64), z)  # no such landmark
+
+
+@pytest.mark.parametrize("update", ["batch", "sequential"])
+def test_a_failed_update_leaves_a_course_initialised_landmark_as_it_was(update):
+    """Course initialisation moves a landmark's mean before the update that uses its reading; when that update
+    fails (an innovation covariance not positive definite) the landmark is put back: unseen, mean 0."""
+    ekf = make_filter(3, init_mode="course", update=update, pose_prior=0.01)
+    ekf.correct([0], [[2.0, 0.3]])
+    before = (
+        ekf.mean.copy(),
+        ekf.cov.copy(),
+        ekf.observed.copy(),
+        ekf.log_det,
+        ekf.pose_cov_given_map.copy(),
+    )
+    with pytest.raises(FilterDivergedError):
+        ekf.correct([1, 2], [[3.0, -0.5], [2.5, 1.0]], measurement_cov=-1e7 * np.eye(2))
+    after = (ekf.mean, ekf.cov, ekf.observed, ekf.log_det, ekf.pose_cov_given_map)
+    for was, now in zip(before, after):
+        assert np.array_equal(was, now)
+    # and it goes on as a filter that never saw the failed call
+    fresh = make_filter(3, init_mode="course", update=update, pose_prior=0.01)
+    fresh.correct([0], [[2.0, 0.3]])
+    for f in (ekf, fresh):
+        f.correct([1, 2], [[3.0, -0.5], [2.5, 1.0]])
+    assert np.array_equal(ekf.mean, fresh.mean) and np.array_equal(ekf.cov, fresh.cov)
+    assert ekf.log_det == fresh.log_det
+
+
+@pytest.mark.parametrize("motion_model", ["wheels", "odometry"])
+def test_running_log_det_and_pose_given_map_hold_over_a_long_drive_without_resync(motion_model):
+    """The default pose prior (1e-10) starts P's information near 1e10, and P is then kept by 3x3 inverses of
+    it at every correction: over 1500 steps of driving, with stretches of standing still (nothing but the
+    odometer's noise to move P off its prior), with no resynchronisation, the running log det and P still
+    match a direct computation at the bookkeeping tests' tolerance."""
+    from ekfslam_gym.sim import World, make_layout
+    from ekfslam_gym.sim.sensor import SensorParams
+
+    sensor = SensorParams()
+    rng = np.random.default_rng(8)
+    layout = make_layout("arena", rng, 30, width=20.0, height=20.0)
+    world = World(layout, sensor=sensor)
+    ekf = EKFSLAM(layout.n_landmarks, motion_model=motion_model, resync_every=0, measurement_noise=sensor.cov,
+                  initial_pose=layout.start, min_range=sensor.min_range,
+                  wheel_base=world.wheel_noise.wheel_base)  # fmt: skip
+    assert ekf.pose_cov[0, 0] == 1e-10
+    read = world.wheel_odometry if motion_model == "wheels" else world.odometry
+    readings = world.sense(rng)
+    ekf.correct(readings.ids, readings.z)
+    for t in range(1500):
+        still = t < 100 or 700 <= t < 800
+        world.step(*((0.0, 0.0) if still else (rng.uniform(0.0, 1.0), rng.uniform(-2.0, 2.0))))
+        odometry = read(rng)
+        readings = world.sense(rng)
+        ekf.predict(odometry.u, control_cov=odometry.cov)
+        ekf.correct(readings.ids, readings.z)
+        if t % 50 == 0 or t == 1499:
+            check_bookkeeping(ekf)
+    assert ekf.observed.sum() > 20

@@ -107,16 +107,18 @@ def test_pickle_mid_episode_continues_identically():
 
 
 def test_reward_is_the_sum_of_its_terms_and_information_gain_telescopes():
-    env = EKFSLAMEnv(reward={"collision": 0.5, "control_effort": 0.1, "a_opt": 0.3})
+    weights = {"collision": 0.5, "step_cost": 0.1, "pose_variance": 0.3}
+    env = EKFSLAMEnv(reward=weights)
     _, info = env.reset(seed=2)
     log_det_0 = info["log_det"]
     rng = np.random.default_rng(0)
+    weights = {**weights, "info_gain": 1.0}
     gains, truncated, terminated = [], False, False
     while not (terminated or truncated):
         _, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, 2))
-        assert reward == pytest.approx(sum(info["reward_terms"].values()), abs=1e-12)
-        assert set(info["reward_terms"]) <= {"info_gain", "a_opt", "collision", "control_effort"}
-        gains.append(info["reward_terms"]["info_gain"])
+        terms = info["reward_terms"]
+        assert reward == pytest.approx(sum(w * terms[name] for name, w in weights.items()), abs=1e-12)
+        gains.append(terms["info_gain"])
     assert sum(gains) == pytest.approx(log_det_0 - info["log_det"], abs=1e-8 * max(1, abs(log_det_0)))
     sign, exact = np.linalg.slogdet(env.filter.cov)
     assert sign > 0 and info["log_det"] == pytest.approx(exact, abs=1e-8 * max(1.0, abs(exact)))
@@ -198,6 +200,37 @@ def test_yaml_configs_match_the_registered_presets():
     assert EKFSLAMEnv(config=root / "loop.yaml").config.world.layout == "loop"
 
 
+def test_config_merges_onto_the_ids_preset_and_replacing_it_is_asked_for(tmp_path):
+    """``config=`` (a mapping or a YAML file) changes the id's preset where it says, and nothing else; only
+    ``preset=None`` starts from the defaults (and then the defaults' step limit is the TimeLimit's)."""
+    large = EnvConfig.from_overrides(**PRESETS["EKFSLAM-Large-v0"])
+    expected = EnvConfig.from_overrides(large, world={"n_landmarks": 40})
+    yaml_file = tmp_path / "forty.yaml"
+    yaml_file.write_text("world:\n  n_landmarks: 40\n")
+    for config in ({"world": {"n_landmarks": 40}}, yaml_file, str(yaml_file)):
+        env = gym.make("EKFSLAM-Large-v0", config=config)
+        assert env.unwrapped.config == expected
+        assert env.spec.max_episode_steps == 1000
+    assert expected.world.layout == "rooms" and expected.world.layout_kwargs["width"] == 40.0
+    loop = gym.make("EKFSLAM-Loop-v0", config={"max_episode_steps": 900}, sensor={"max_range": 4.0})
+    assert loop.unwrapped.config == EnvConfig.from_overrides(
+        EnvConfig.from_overrides(**PRESETS["EKFSLAM-Loop-v0"]),
+        max_episode_steps=900,
+        sensor={"max_range": 4.0},
+    )
+    assert loop.spec.max_episode_steps == 900
+
+    replaced = gym.make("EKFSLAM-Large-v0", config={"world": {"n_landmarks": 40}}, preset=None)
+    assert replaced.unwrapped.config == EnvConfig.from_overrides(world={"n_landmarks": 40})
+    assert replaced.spec.max_episode_steps == 500
+    complete = EnvConfig.from_overrides(world={"n_landmarks": 12})  # a whole EnvConfig is used as it is
+    assert gym.make("EKFSLAM-Large-v0", config=complete).unwrapped.config == complete
+    assert EKFSLAMEnv(preset="EKFSLAM-Large-v0").config == large
+    assert EKFSLAMEnv().config == EnvConfig()
+    with pytest.raises(ValueError, match=r"unknown preset 'EKFSLAM-Huge-v0'; known: \['EKFSLAM-Large-v0'"):
+        EKFSLAMEnv(preset="EKFSLAM-Huge-v0")
+
+
 def test_large_variant_has_at_least_100_landmarks_and_truncates_at_its_own_limit():
     env = gym.make("EKFSLAM-Large-v0")
     env.reset(seed=0)
@@ -217,7 +250,7 @@ def test_driving_into_a_wall_is_reported_penalised_and_optionally_terminates():
         if info["collision"]:
             hits.append(info["reward_terms"]["collision"])
         assert not terminated
-    assert hits and all(h == -2.0 for h in hits)
+    assert hits and all(h == -1.0 for h in hits)  # unweighted
     strict = EKFSLAMEnv(terminate_on_collision=True)
     strict.reset(seed=0)
     for _ in range(400):
@@ -409,11 +442,11 @@ def test_coverage_shaping_pays_for_newly_looked_at_area_only():
     for _ in range(50):
         *_, info = env.step(np.array([1.0, 0.3]))
         total += info["reward_terms"]["coverage"]
-    assert total == pytest.approx(2.0 * (env.coverage_memory.sum() * 0.25 - area))
+    assert total == pytest.approx(env.coverage_memory.sum() * 0.25 - area)  # m^2, unweighted
     for _ in range(30):  # spinning on the spot looks at nothing new after the first turn
-        *_, info = env.step(np.array([0.0, 1.0]))
+        *_, reward, _, _, info = env.step(np.array([0.0, 1.0]))
     assert info["reward_terms"]["coverage"] == 0.0
-    assert "coverage" not in EKFSLAMEnv().reset(seed=1)[1]["reward_terms"]
+    assert EKFSLAMEnv().reset(seed=1)[1]["reward_terms"]["coverage"] == 0.0  # every term, at reset too
 
 
 def test_coarse_window_holds_the_fraction_looked_at_and_can_be_disabled():
@@ -514,7 +547,7 @@ def test_layout_rejects_bad_sizes():
 
 
 # ---------------------------------------------------------------------------------------- reward hooks, access
-def test_one_list_of_reward_terms_makes_the_config_fields_and_the_hooks():
+def test_one_list_of_reward_terms_makes_the_config_fields_and_the_info():
     import dataclasses
 
     from ekfslam_gym.envs import RewardConfig
@@ -522,14 +555,14 @@ def test_one_list_of_reward_terms_makes_the_config_fields_and_the_hooks():
 
     assert tuple(f.name for f in dataclasses.fields(RewardConfig)) == REWARD_NAMES
     assert all(getattr(RewardConfig(), t.name) == t.default for t in REWARD_TERMS)
-    assert all(callable(getattr(EKFSLAMEnv, f"_reward_{name}", None)) for name in REWARD_NAMES)
-    # Only the terms with a non-zero weight, in the list's order; the reward is their sum.
-    env = EKFSLAMEnv(reward={"info_gain": 0.0, "step_cost": 0.25, "e_opt": 0.5})
+    # Every term, unweighted, in the list's order, whatever its weight; the reward weighs them.
+    env = EKFSLAMEnv(reward={"info_gain": 0.0, "step_cost": 0.25, "pose_variance": 0.5})
     env.reset(seed=0)
     _, reward, *_, info = env.step(np.array([0.3, 0.1]))
-    assert list(info["reward_terms"]) == ["e_opt", "collision", "step_cost"]
-    assert info["reward_terms"]["step_cost"] == -0.25
-    assert reward == sum(info["reward_terms"].values())
+    terms = info["reward_terms"]
+    assert list(terms) == list(REWARD_NAMES)
+    assert terms["step_cost"] == -1.0 and terms["info_gain"] != 0.0
+    assert reward == terms["collision"] + 0.25 * terms["step_cost"] + 0.5 * terms["pose_variance"]
     assert pickle.loads(pickle.dumps(RewardConfig(collision=3.0))) == RewardConfig(collision=3.0)
 
 
@@ -646,6 +679,58 @@ def test_two_different_step_limits_are_an_error_and_no_time_limit_leaves_the_env
     assert flags == [False] * 8 + [True] and left[-1] == 0.0
     direct = EKFSLAMEnv(max_episode_steps=9)  # no gym.make: the config alone
     assert run_to_truncation(direct, 20)[1] == [False] * 8 + [True]
+
+
+@pytest.mark.parametrize(
+    "env_id, action, limit",
+    [
+        ("EKFSLAM-v0", {"kind": "primitives"}, 50),
+        ("EKFSLAM-Loop-v0", {"kind": "waypoint"}, 80),
+        ("EKFSLAM-v0", {"kind": "velocity", "hold": 4}, 125),
+        ("EKFSLAM-v0", {"kind": "primitives", "hold": 1}, 500),
+    ],
+)
+def test_macro_actions_keep_the_registered_episode_time_and_report_their_hold(env_id, action, limit):
+    env = gym.make(env_id, action=action)
+    cfg = env.unwrapped.config
+    assert cfg.action.hold == action.get("hold", 10)  # the effective hold, never None
+    assert env.spec.max_episode_steps == cfg.max_episode_steps == limit
+    assert time_limits(env) == [limit]
+    assert limit * cfg.action.hold == gym.spec(env_id).max_episode_steps  # the same simulated time
+    rebuilt = gym.make(env.spec)
+    assert rebuilt.spec.max_episode_steps == rebuilt.unwrapped.config.max_episode_steps == limit
+
+
+def test_a_primitives_episode_truncates_after_the_registered_time():
+    env = gym.make("EKFSLAM-v0", action={"kind": "primitives"})
+    obs, _ = env.reset(seed=0)
+    for step in range(1, 51):
+        obs, _, terminated, truncated, info = env.step(7)  # turning in place: nothing ends the episode
+        assert not terminated and truncated == (step == 50)
+    assert info["step"] == 500 and time_left(env, obs) == 0.0
+
+
+def test_a_given_step_limit_is_kept_for_macro_actions_and_an_inexact_division_warns():
+    for kwargs in (
+        {"max_episode_steps": 7},
+        {"config": {"max_episode_steps": 7, "action": {"kind": "primitives"}}},
+    ):
+        env = gym.make("EKFSLAM-v0", **{"action": {"kind": "primitives"}, **kwargs})
+        assert env.spec.max_episode_steps == env.unwrapped.config.max_episode_steps == 7
+    with pytest.warns(UserWarning, match="does not divide"):
+        env = gym.make("EKFSLAM-Large-v0", action={"kind": "primitives", "hold": 3})
+    assert env.spec.max_episode_steps == env.unwrapped.config.max_episode_steps == 334
+
+
+def test_a_change_of_action_kind_takes_the_new_kinds_default_hold():
+    assert EnvConfig().action.hold == 1
+    assert EnvConfig.from_overrides(action={"kind": "primitives"}).action.hold == 10
+    three = EnvConfig.from_overrides(action={"kind": "primitives", "hold": 3})
+    assert EnvConfig.from_overrides(three, action={"guard": 0.2}).action.hold == 3  # kind unchanged: kept
+    assert EnvConfig.from_overrides(three, action={"kind": "primitives"}).action.hold == 3
+    assert EnvConfig.from_overrides(three, action={"kind": "waypoint"}).action.hold == 10
+    assert EnvConfig.from_overrides(three, action={"kind": "velocity"}).action.hold == 1
+    assert EnvConfig.from_overrides(**three.to_dict()) == three  # a written record reads back
 
 
 FILTER_SETTINGS = [

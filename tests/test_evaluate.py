@@ -6,12 +6,15 @@ import json
 import math
 
 import pytest
+from ekfslam_gym.agents import make_agent
 
 from ekfslam_gym.cli.common import parse_seeds
 from ekfslam_gym.cli.evaluate import main
 from ekfslam_gym.evaluation.aggregate import aggregate, summary
-from ekfslam_gym.evaluation.episodes import HELD_OUT_SEEDS, METRIC_KEYS, evaluate_agent
+from ekfslam_gym.evaluation.episode_metrics import METRIC_KEYS
 from ekfslam_gym.evaluation.report import markdown_table
+from ekfslam_gym.evaluation.rollout import evaluate_agent
+from ekfslam_gym.seeds import HELD_OUT_SEEDS
 
 SHORT = ["--seeds", "0-1", "--max-episode-steps", "20", "--no-progress"]
 
@@ -75,21 +78,22 @@ def test_parse_seeds_and_the_held_out_suite():
     assert parse_seeds("1,4,9") == [1, 4, 9]
     assert parse_seeds("0-2,10") == [0, 1, 2, 10]
     assert HELD_OUT_SEEDS == tuple(range(10000, 10050))
+    assert parse_seeds("heldout") == list(HELD_OUT_SEEDS)
     for bad in ("5-2", "a-b", ""):
         with pytest.raises(Exception):  # noqa: B017 (argparse's ArgumentTypeError)
             parse_seeds(bad)
 
 
 def test_evaluate_agent_is_reproducible_and_paired():
-    first = evaluate_agent("random", "EKFSLAM-v0", [0, 1], max_episode_steps=15)
-    second = evaluate_agent("random", "EKFSLAM-v0", [0, 1], max_episode_steps=15)
+    first = evaluate_agent(make_agent("random"), "EKFSLAM-v0", [0, 1], max_episode_steps=15)
+    second = evaluate_agent(make_agent("random"), "EKFSLAM-v0", [0, 1], max_episode_steps=15)
     assert first == second
     assert [e["seed"] for e in first] == [0, 1] and all(e["steps"] == 15 for e in first)
     assert set(METRIC_KEYS) <= set(first[0])
 
 
 def test_max_episode_steps_goes_into_the_env_config():
-    from ekfslam_gym.evaluation.episodes import make_env
+    from ekfslam_gym.evaluation.rollout import make_env
 
     env = make_env("EKFSLAM-Loop-v0", max_episode_steps=12)
     assert env.unwrapped.config.max_episode_steps == 12
@@ -110,7 +114,7 @@ def test_aggregate_uses_iqm_and_skips_nans():
 
 
 def test_episode_metrics_are_consistent_with_the_env():
-    (episode,) = evaluate_agent("lawnmower", "EKFSLAM-v0", [3], max_episode_steps=40)
+    (episode,) = evaluate_agent(make_agent("lawnmower"), "EKFSLAM-v0", [3], max_episode_steps=40)
     assert episode["seen_fraction"] == pytest.approx(1 - episode["missed_landmarks"] / 30)
     assert 0 <= episode["nees_in_bounds"] <= 1 and episode["anees"] > 0
     assert episode["ate"] >= 0 and episode["landmark_rmse"] >= 0 and 0 < episode["path_length"] <= 4.0 + 1e-6

@@ -181,7 +181,7 @@ def test_iterated_correction_reaches_the_map_of_the_update():
     rng = np.random.default_rng(25)
     means = {}
     for variant in ("ekf", "iekf"):
-        ekf = make_filter(3, init_mode="inverse", variant=variant, iterations=20, pose_prior=[1e-4, 1e-4, 0.09],
+        ekf = make_filter(3, init_mode="inverse", variant=variant, iterations=20, initial_pose_cov=[1e-4, 1e-4, 0.09],
                           initial_pose=[0.0, 0.0, 0.0])  # fmt: skip
         ekf.correct([0, 1, 2], [[4.0, 0.0], [4.0, 2.0], [4.0, -2.0]])
         prior_mean, prior_cov = ekf.mean.copy(), ekf.cov.copy()

@@ -387,7 +387,7 @@ def test_cli_text_and_plot(small_g2o, tmp_path, capsys):
 
 
 def test_cli_errors(tmp_path, capsys):
-    bad = tmp_path / "graph.txt"
+    bad = tmp_path / "graph.csv"
     bad.write_text("")
     assert graph_cli([str(bad)]) == 1
     assert "unknown graph format" in capsys.readouterr().err

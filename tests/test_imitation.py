@@ -12,7 +12,7 @@ import pytest
 pytest.importorskip("stable_baselines3")
 
 from ekfslam_gym.agents import demonstrations as demo_mod  # noqa: E402
-from ekfslam_gym.agents.demonstrations import Demonstrations, GreedyPrimitivesPlanner, check_seeds, collect  # noqa: E402
+from ekfslam_gym.agents.demonstrations import Demonstrations, GreedyPrimitivesPlanner, collect  # noqa: E402
 from ekfslam_gym.agents.imitation import (  # noqa: E402
     BOX_MATCH,
     behaviour_clone,
@@ -23,6 +23,7 @@ from ekfslam_gym.agents.imitation import (  # noqa: E402
 )
 
 from ekfslam_gym.envs.actions import PRIMITIVES  # noqa: E402
+from ekfslam_gym.envs.rewards import REWARD_NAMES  # noqa: E402
 
 PRIMITIVE_KWARGS = {"action": {"kind": "primitives", "hold": 10}, "max_episode_steps": 6}
 WAYPOINT_KWARGS = {"action": {"kind": "waypoint", "hold": 10}, "max_episode_steps": 6}
@@ -51,14 +52,14 @@ def test_demonstrations_have_the_env_shapes_and_valid_planner_actions(tmp_path):
         "planner": "greedy",
         "planner_kwargs": {},
         "driver": None,
+        "reward_terms": "unweighted",
     }
-    # Every term with a weight is kept, and they sum to the reward.
-    assert (
-        set(loaded.reward_terms) == {name for name, w in weights.items() if w} == {"info_gain", "collision"}
-    )
+    # Every term is kept, unweighted, and weighted they sum to the reward.
+    assert set(loaded.reward_terms) == set(REWARD_NAMES)
     for name, values in loaded.reward_terms.items():
         assert np.array_equal(values, demos.reward_terms[name]), name
-    np.testing.assert_allclose(sum(loaded.reward_terms.values()), loaded.rewards, rtol=1e-12, atol=1e-12)
+    weighted = sum(w * loaded.reward_terms[name] for name, w in weights.items())
+    np.testing.assert_allclose(weighted, loaded.rewards, rtol=1e-12, atol=1e-12)
     # Deterministic: the same seeds give the same demonstrations.
     again = collect("EKFSLAM-v0", [30000, 30001], PRIMITIVE_KWARGS)
     assert np.array_equal(again.actions, demos.actions) and np.array_equal(
@@ -77,13 +78,22 @@ def test_reweighted_demonstrations_are_those_collected_under_the_other_reward():
     )
     again = demo_mod.reweighted(demos, demo_mod.env_reward_weights("EKFSLAM-v0", other))
     np.testing.assert_allclose(again.rewards, fresh.rewards, rtol=1e-9, atol=1e-12)
-    assert set(again.reward_terms) == set(fresh.reward_terms) == {"info_gain", "pose_variance"}
+    assert set(again.reward_terms) == set(fresh.reward_terms) == set(REWARD_NAMES)
     assert again.meta["reward_weights"] == fresh.meta["reward_weights"]
-    # The same weights give the same object; a term never recorded, or a file without terms, is refused.
+    # The same weights give the same object.
     assert demo_mod.reweighted(demos, demos.meta["reward_weights"]) is demos
-    needs = demo_mod.env_reward_weights("EKFSLAM-v0", {"reward": {"map_accuracy": 10.0}})
-    with pytest.raises(ValueError, match="map_accuracy"):
-        demo_mod.reweighted(demos, needs)
+    # An older file kept the weighted terms with a non-zero weight only: it re-weighs those, and refuses others.
+    weights = demos.meta["reward_weights"]
+    kept = {name: w * demos.reward_terms[name] for name, w in weights.items() if w}
+    meta = {k: v for k, v in demos.meta.items() if k != "reward_terms"}
+    older = Demonstrations(
+        demos.observations, demos.actions, demos.rewards, demos.episodes, demos.seeds, meta, kept
+    )
+    from_older = demo_mod.reweighted(older, demo_mod.env_reward_weights("EKFSLAM-v0", other))
+    np.testing.assert_allclose(from_older.rewards, fresh.rewards, rtol=1e-9, atol=1e-12)
+    needs = demo_mod.env_reward_weights("EKFSLAM-v0", {"reward": {"coverage": 10.0}})
+    with pytest.raises(ValueError, match="coverage"):
+        demo_mod.reweighted(older, needs)
     old = Demonstrations(demos.observations, demos.actions, demos.rewards, demos.episodes, demos.seeds,
                          {k: v for k, v in demos.meta.items() if k != "reward_weights"})  # fmt: skip
     with pytest.raises(ValueError, match="predate"):
@@ -176,13 +186,6 @@ def test_planner_kwargs_reach_the_demonstrator_and_are_recorded(monkeypatch):
     assert [(p.relocalize_std, p.goal_distance) for p in built] == [(0.25, 1.25)] * 2
     assert demos.meta["planner_kwargs"] == kwargs == driven.meta["planner_kwargs"]
     assert collect("EKFSLAM-v0", [30000], PRIMITIVE_KWARGS).meta["planner_kwargs"] == {}
-
-
-def test_demonstration_seeds_avoid_the_held_out_and_evaluation_seeds():
-    assert check_seeds(range(30000, 30003)) == [30000, 30001, 30002]
-    for bad in ([10000], [10049], [20005], [-1]):
-        with pytest.raises(ValueError, match="held-out"):
-            check_seeds(bad)
 
 
 def test_discounted_returns_known_answers():
@@ -506,9 +509,8 @@ def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
     dagger = demo_mod.load(tmp_path / "rewarded" / "dagger.npz")
     assert dagger.meta["reward_weights"]["collision"] == 3.0 and dagger.meta["reweighted_from"] == str(path)
     assert dagger.meta["env_kwargs"]["reward"] == {"collision": 3.0}
-    needs = [*rewarded[:-1], f"env_kwargs={{{kinds}, reward: {{coverage: 1.0}}}}"]
-    with pytest.raises(ValueError, match="coverage"):
-        train.main(needs)
+    # Every term is recorded unweighted, so any reward can re-weigh them, a term weighted 0 when collected too.
+    assert set(dagger.reward_terms) == set(REWARD_NAMES) and dagger.meta["reward_terms"] == "unweighted"
 
 
 def test_a_recurrent_config_clones_the_planner_with_a_dagger_round_at_smoke_size(tmp_path):
@@ -518,7 +520,7 @@ def test_a_recurrent_config_clones_the_planner_with_a_dagger_round_at_smoke_size
     from ekfslam_gym.agents.ppo import PPOAgent
 
     import train
-    from ekfslam_gym.evaluation.episodes import evaluate_agent
+    from ekfslam_gym.evaluation.rollout import evaluate_agent
 
     out = tmp_path / "lstm"
     train.main(["--config", "configs/ppo_lstm.yaml", "--timesteps", "64", "--out", str(out), "--seed", "0",

@@ -17,11 +17,13 @@ class _Stream(io.StringIO):
 
 @pytest.mark.parametrize("terminal", [True, False])
 def test_evaluation_draws_its_bar_only_on_a_terminal(monkeypatch, terminal):
-    from ekfslam_gym.evaluation.episodes import evaluate_agent
+    from ekfslam_gym.agents import make_agent
+
+    from ekfslam_gym.evaluation.rollout import evaluate_agent
 
     stream = _Stream(terminal)
     monkeypatch.setattr("sys.stderr", stream)
-    evaluate_agent("random", seeds=[20000, 20001], max_episode_steps=5, progress=True)
+    evaluate_agent(make_agent("random"), seeds=[20000, 20001], max_episode_steps=5, progress=True)
     assert ("\r" in stream.getvalue()) == terminal
 
 

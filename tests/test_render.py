@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -225,13 +226,49 @@ def test_human_mode_runs_headless(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
     r = Renderer("human", width=W, height=H, fps=1000)
     try:
-        assert r.render(make_scene()) is None
+        with pytest.warns(UserWarning, match="shows nothing: SDL's video driver is 'dummy'"):
+            assert r.render(make_scene()) is None
         assert pygame.display.get_init() and pygame.display.get_surface().get_size() == (W, H)
         assert r.render(make_scene(pose_true=np.array([4.0, 4.0, 0.0]))) is None
     finally:
         r.close()
         r.close()  # idempotent
     assert not pygame.display.get_init()
+
+
+def test_human_mode_without_a_display_says_so(monkeypatch: pytest.MonkeyPatch) -> None:
+    """No window system: SDL falls back to a driver that draws nowhere, and the env warns with the reason
+    (once, when the window opens); where SDL cannot open any display, render raises with it."""
+    import gymnasium as gym
+
+    import ekfslam_gym  # noqa: F401
+
+    for name in ("DISPLAY", "WAYLAND_DISPLAY"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setenv("SDL_VIDEODRIVER", "offscreen")
+    env = gym.make("EKFSLAM-v0", render_mode="human")
+    message = (
+        r"driver is 'offscreen'.*SDL_VIDEODRIVER='offscreen', DISPLAY and WAYLAND_DISPLAY unset.*rgb_array"
+    )
+    try:
+        with pytest.warns(UserWarning, match=message):
+            env.reset(seed=0)  # human mode draws at reset and at every step
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # said once
+            env.step(np.zeros(2, dtype=np.float32))
+            assert env.render() is None
+    finally:
+        env.close()
+
+    def no_video_device() -> None:
+        raise pygame.error("No available video device")
+
+    monkeypatch.setattr(pygame.display, "init", no_video_device)
+    r = Renderer("human", width=W, height=H)
+    with pytest.raises(
+        RuntimeError, match=r"needs a display and SDL could not open one \(No available video"
+    ):
+        r.render(make_scene())
 
 
 def test_bad_render_mode_lists_the_valid_ones() -> None:

@@ -10,7 +10,8 @@ import pytest
 from ekfslam_gym.sim import LAYOUTS, Layout, make_layout, place_landmarks
 from ekfslam_gym.sim.geometry import min_wall_distance
 
-NAMES = sorted(LAYOUTS)
+# the generators that draw their landmarks; ``surveyed`` is given them (tested at the end)
+NAMES = sorted(set(LAYOUTS) - {"surveyed"})
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -147,3 +148,14 @@ def test_the_free_space_cache_changes_no_layout(name):
         np.testing.assert_array_equal(a.walls, b.walls)
         np.testing.assert_array_equal(a.start, b.start)
     assert 0 < len(layouts._grid_cache) <= layouts._GRID_CACHE_SIZE
+
+
+def test_surveyed_layout_keeps_the_landmarks_it_is_given() -> None:
+    rng = np.random.default_rng(0)
+    layout = make_layout("surveyed", rng, 2, landmarks=[[1.0, 1.0], [3.0, 2.0]], width=4.0, height=3.0)
+    np.testing.assert_array_equal(layout.landmarks, [[1.0, 1.0], [3.0, 2.0]])
+    assert min_wall_distance(layout.start[None, :2], layout.walls)[0] >= 1.0
+    with pytest.raises(ValueError, match="n_landmarks is 3 but 2 landmarks"):
+        make_layout("surveyed", rng, 3, landmarks=[[1.0, 1.0], [3.0, 2.0]], width=4.0, height=3.0)
+    with pytest.raises(ValueError, match="inside the 4.0 x 3.0 m rectangle"):
+        make_layout("surveyed", rng, 1, landmarks=[[5.0, 1.0]], width=4.0, height=3.0)

@@ -7,8 +7,8 @@ from ekfslam_gym.agents import make_agent
 
 import ekfslam_gym  # noqa: F401
 from ekfslam_gym.cli.smoothing import main
-from ekfslam_gym.evaluation.episodes import EpisodeRecorder, run_episode
-from ekfslam_gym.evaluation.smoothing import compare_with_smoother
+from ekfslam_gym.evaluation.rollout import run_episode
+from ekfslam_gym.evaluation.smoothing import EpisodeRecorder, compare_with_smoother
 
 
 @pytest.mark.parametrize("seed", [10000, 10001])
@@ -34,8 +34,16 @@ def test_recorder_keeps_what_the_graph_needs():
     velocity = gym.make("EKFSLAM-v0", filter={"motion_model": "velocity"})
     _, info = velocity.reset(seed=0)
     _, _, _, _, info = velocity.step(np.zeros(2, dtype=np.float32))
-    with pytest.raises(ValueError, match="odometry"):
+    with pytest.raises(ValueError, match="reads odometry or wheels odometry, not velocity"):
         recorder.add(info)
+
+
+def test_the_recorder_takes_wheel_odometry_too():
+    env = gym.make("EKFSLAM-v0", filter={"motion_model": "wheels"}, max_episode_steps=30)
+    recorder = EpisodeRecorder()
+    run_episode(env, make_agent("circle"), 3, recording=recorder)
+    assert len(recorder.odometry) == 30
+    assert compare_with_smoother(recorder, env)["steps"] == 30
 
 
 def test_cli_prints_a_row_per_seed(capsys):

@@ -110,7 +110,8 @@ def test_reward_is_unchanged_by_the_truth_and_belief_gains():
         assert (
             "truth_gain" not in step_info["reward_terms"] and "belief_gain" not in step_info["reward_terms"]
         )
-        assert reward == sum(step_info["reward_terms"].values(), 0.0)
+        terms = step_info["reward_terms"]
+        assert reward == terms["info_gain"] + terms["collision"]  # the default weights, 1 and 1
 
 
 def test_gain_correlation_known_answers():
@@ -142,7 +143,8 @@ def test_gain_correlation_known_answers():
 def test_evaluation_reports_the_belief_truth_correlation_and_the_final_map_nees(overrides):
     """run_episode correlates info["belief_gain"] with info["truth_gain"], step by step, and scores the final
     map: the joint NEES of the slots holding a landmark, over its 2 n dof."""
-    from ekfslam_gym.evaluation.episodes import BELIEF_KEYS, METRIC_KEYS, make_env, run_episode
+    from ekfslam_gym.evaluation.episode_metrics import BELIEF_KEYS, METRIC_KEYS
+    from ekfslam_gym.evaluation.rollout import make_env, run_episode
 
     class Held:
         name = "held"
@@ -197,7 +199,7 @@ def _beside_plain(reward: dict, steps: int, seed: int, action_seed: int, **kwarg
 
 
 def test_pose_variance_reward_is_minus_its_weight_times_the_pose_position_variance():
-    """The optional ``pose_variance`` term costs weight x tr Sigma_xy of the pose estimate after each control step
+    """The optional ``pose_variance`` term, -tr Sigma_xy of the pose estimate after each control step, costs weight x it
     (read against ``info["pose_cov"]`` and the filter's own covariance), the rest of the reward is unchanged,
     and the cost grows while the robot explores without re-observing (dead reckoning between sightings)."""
     weight = 7.0
@@ -205,159 +207,10 @@ def test_pose_variance_reward_is_minus_its_weight_times_the_pose_position_varian
     for shaped, reward, reward_plain, info in _beside_plain(
         {"pose_variance": weight}, 60, seed=3, action_seed=8
     ):
-        term = info["reward_terms"]["pose_variance"]
+        term = info["reward_terms"]["pose_variance"]  # unweighted
         cov = np.asarray(shaped.filter.cov)
-        assert term == -weight * (cov[0, 0] + cov[1, 1])
-        assert term == -weight * (info["pose_cov"][0, 0] + info["pose_cov"][1, 1])
-        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
+        assert term == -(cov[0, 0] + cov[1, 1])
+        assert term == -(info["pose_cov"][0, 0] + info["pose_cov"][1, 1])
+        assert reward == pytest.approx(reward_plain + weight * term, rel=0, abs=1e-9)
         costs.append(term)
     assert all(c < 0.0 for c in costs) and min(costs) < costs[0]  # a variance, and it grows somewhere
-
-
-@pytest.mark.parametrize("filter_", [{}, {"association": "nearest"}], ids=["known", "unknown"])
-def test_pose_error_reward_is_minus_its_weight_times_the_true_squared_position_error(filter_):
-    """The optional ``pose_error`` term costs weight x |(x, y) estimate - true|^2 after each control step (read
-    against the filter's mean and ``info["true_pose"]``), the rest of the reward is unchanged, and it is not the
-    variance term: the error and the variance differ step by step."""
-    weight = 3.0
-    ratios = []
-    stepped = _beside_plain({"pose_error": weight}, 80, seed=6, action_seed=9, filter=filter_)
-    for shaped, reward, reward_plain, info in stepped:
-        term = info["reward_terms"]["pose_error"]
-        error = np.asarray(shaped.filter.mean)[:2] - np.asarray(info["true_pose"])[:2]
-        assert term == pytest.approx(-weight * float(error @ error), rel=1e-12, abs=1e-15)
-        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
-        cov = np.asarray(shaped.filter.cov)
-        ratios.append(-term / weight / (cov[0, 0] + cov[1, 1]))
-    assert all(r >= 0.0 for r in ratios) and max(ratios) - min(ratios) > 0.1
-
-
-def _log_rms_std(env: EKFSLAMEnv) -> float:
-    """ln sqrt(mean tr Sigma_jj) over the slots the filter holds a landmark in, from its covariance; NaN if none."""
-    cov = np.asarray(env.filter.cov)
-    seen = np.flatnonzero(np.isfinite(_errors(env)))
-    if seen.size == 0:
-        return math.nan
-    traces = cov[3 + 2 * seen, 3 + 2 * seen] + cov[4 + 2 * seen, 4 + 2 * seen]
-    return 0.5 * math.log(traces.mean())
-
-
-def _telescoping_term(name, weight, measure, steps, seed, check=None, **kwargs):
-    """Steps an env paying ``name`` at ``weight`` beside one with the default reward, on the tests' held random
-    velocity commands (seeded random primitives in a macro env), until the episode ends, and checks that the term
-    is 0 while ``measure(env)`` is NaN (nothing seen yet), weight x its drop over each control step, and the only
-    change to the reward; ``check(info, now, term)`` adds a test of each step. Returns the episode's terms and
-    the measure at reset, at its first finite value and at the end."""
-    macro = "action" in kwargs
-    plain = EKFSLAMEnv(max_episode_steps=steps, **kwargs)
-    shaped = EKFSLAMEnv(max_episode_steps=steps, reward={name: weight}, **kwargs)
-    plain.reset(seed=seed)
-    shaped.reset(seed=seed)
-    at_reset = first = previous = measure(shaped)
-    rng = np.random.default_rng(6)
-    terms = []
-    for a in _held_actions(2, steps):
-        if macro:
-            a = int(rng.integers(9))
-        _, reward_plain, *_ = plain.step(a)
-        _, reward, terminated, truncated, info = shaped.step(a)
-        term = info["reward_terms"][name]
-        now = measure(shaped)
-        if check is not None:
-            check(info, now, term)
-        if math.isnan(previous):
-            first = now
-            if not macro:  # a macro step's terms also hold its inner steps after the first landmark
-                assert term == 0.0
-        elif not macro:
-            assert term == pytest.approx(weight * (previous - now), rel=1e-9, abs=1e-12)
-        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
-        previous = now
-        terms.append(term)
-        if terminated or truncated:
-            break
-    return terms, at_reset, first, previous
-
-
-@pytest.mark.parametrize("filter_", [{}, {"association": "nearest"}], ids=["known", "unknown"])
-def test_map_accuracy_reward_telescopes_to_the_log_ratio_of_the_expected_landmark_rmse(filter_):
-    """The optional ``map_accuracy`` term pays weight x the drop of ln sqrt(mean_j tr Sigma_jj) over the seen
-    landmarks (read against the filter's covariance), 0 until a landmark is seen, the rest of the reward is
-    unchanged, and over an episode the terms sum to weight x ln(R_first / R_final); a discovery placed less
-    certainly than the map so far costs, re-observations pay."""
-    weight = 30.0
-    terms, _, first, last = _telescoping_term("map_accuracy", weight, _log_rms_std, 120, 5, filter=filter_)
-    assert sum(terms) == pytest.approx(weight * (first - last), rel=1e-9, abs=1e-9)
-    assert min(terms) < 0.0 < max(terms)  # both a costly discovery and a paying re-observation happened
-
-
-def _mse(env: EKFSLAMEnv) -> float:
-    """The mean squared position error over the slots holding a landmark, from the filter and the truth; NaN if none."""
-    errors = _errors(env)
-    return float(np.nanmean(errors)) if np.isfinite(errors).any() else math.nan
-
-
-def _mse_is_the_squared_map_rmse(info: dict, now: float, term: float) -> None:
-    if math.isnan(now):
-        assert info["landmarks_seen"] == 0 and term == 0.0
-    else:
-        assert now == pytest.approx(info["map_rmse"] ** 2, rel=1e-9, abs=1e-15)
-
-
-@pytest.mark.parametrize(
-    "kwargs, seed",
-    [
-        ({}, 5),
-        ({"filter": {"association": "nearest"}}, 5),
-        ({"action": {"kind": "primitives", "hold": 10}}, 5),
-        ({"sensor": {"max_range": 2.0}}, 3),  # nothing in range at reset: the first landmark comes at step 25
-    ],
-    ids=["known", "unknown", "primitives", "none-seen-at-reset"],
-)
-def test_map_error_reward_telescopes_to_the_drop_of_the_true_mean_squared_landmark_error(kwargs, seed):
-    """The optional ``map_error`` term pays weight x the drop of the seen landmarks' true mean squared position
-    error (read against the filter's landmarks and the true ones, and against ``info["map_rmse"]``), 0 until a
-    landmark is seen, the rest of the reward is unchanged, and over an episode the terms sum to weight x
-    (MSE_first - MSE_final), in a macro step too (summed over its inner steps); a discovery placed worse than
-    the map so far costs, a correction pays."""
-    weight = 5000.0
-    steps = 30 if "action" in kwargs else 150
-    check = _mse_is_the_squared_map_rmse
-    terms, at_reset, first, last = _telescoping_term("map_error", weight, _mse, steps, seed, check, **kwargs)
-    assert math.isnan(at_reset) == (seed == 3)
-    assert sum(terms) == pytest.approx(weight * (first - last), rel=1e-9, abs=1e-9)
-    assert min(terms) < 0.0 < max(terms)  # both a costly discovery and a paying correction happened
-
-
-@pytest.mark.parametrize("action", [{}, {"action": {"kind": "primitives", "hold": 10}}])
-def test_map_variance_reward_is_its_weight_times_the_belief_gain(action):
-    """The optional ``map_variance`` term pays weight x ``info["belief_gain"]`` (summed over a macro step's inner
-    steps), the rest of the reward is unchanged, and over an episode of control steps it sums to weight x
-    (each seen landmark's tr Sigma_jj at first sight - its final one): nothing for discoveries, the drop of the
-    mapped part's variance for everything after."""
-    weight = 40.0
-    plain = EKFSLAMEnv(max_episode_steps=30, **action)
-    shaped = EKFSLAMEnv(max_episode_steps=30, reward={"map_variance": weight}, **action)
-    plain.reset(seed=4)
-    _, info = shaped.reset(seed=4)
-    assert "map_variance" not in info["reward_terms"]
-    first = _traces(shaped)  # NaN for the landmarks not yet seen
-    rng = np.random.default_rng(5)
-    total, nonzero = 0.0, 0
-    for _ in range(30):
-        a = int(rng.integers(9)) if action else rng.uniform(-1, 1, 2).astype(np.float32)
-        _, reward_plain, *_, info_plain = plain.step(a)
-        _, reward, terminated, truncated, info = shaped.step(a)
-        term = info["reward_terms"]["map_variance"]
-        assert term == pytest.approx(weight * info["belief_gain"], rel=1e-12, abs=1e-15)  # sums of products
-        assert reward == pytest.approx(reward_plain + term, rel=0, abs=1e-9)
-        assert info["belief_gain"] == info_plain["belief_gain"]  # the same drive and filter
-        now = _traces(shaped)
-        first = np.where(np.isnan(first), now, first)
-        total += term
-        nonzero += term != 0.0
-        if terminated or truncated:
-            break
-    assert nonzero > 0 and total > 0.0  # marginal variances of seen landmarks only fall in an EKF
-    if not action:  # with macro steps a landmark's first sight falls between the observed steps
-        assert total == pytest.approx(weight * np.nansum(first - _traces(shaped)), rel=1e-9, abs=1e-12)

@@ -18,7 +18,8 @@ from ekfslam_gym.cli.replay import main as replay_main
 from ekfslam_gym.data.synthetic import simulate_drive
 from ekfslam_gym.data.tum import LANDMARK_COLUMNS, read_tum, write_landmarks_csv, write_tum, yaw_quaternions
 from ekfslam_gym.evaluation import metrics
-from ekfslam_gym.evaluation.episodes import export_tum, make_env, run_episode
+from ekfslam_gym.evaluation.export import export_tum
+from ekfslam_gym.evaluation.rollout import make_env, run_episode
 
 # ------------------------------------------------------------------------------------------ the file format
 

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from ..evaluation.paired import Model, paired_difference
 from ..evaluation.report import BETTER
+from .common import command_line, command_parser
 
 DEFAULT_METRICS = ("map_log_det", "landmark_rmse", "ate")
 
@@ -37,11 +38,11 @@ def _models(paths: list[Path], key: str | None) -> list[Model]:
     return models
 
 
+@command_line("compare")
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m ekfslam_gym.compare", description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )  # fmt: skip
+    parser = command_parser(
+        "compare", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--a", nargs="+", type=Path, required=True, metavar="FILE", help="group a's files")
     parser.add_argument("--b", nargs="+", type=Path, required=True, metavar="FILE", help="group b's files")
     parser.add_argument("--key", help="take only this entry of each file (e.g. 'ppo[model]')")

@@ -20,23 +20,30 @@ import sys
 from collections.abc import Sequence
 
 from ..evaluation.consistency import QUANTITIES, ConsistencyRun, run_consistency
-from .common import merge_env_kwargs, parse_seeds
-
-VARIANTS = ("ekf", "fej", "iekf")
+from ..filter.settings import VARIANTS
+from .common import (
+    agent_from_flags,
+    check_env_flags,
+    command_line,
+    command_parser,
+    json_object,
+    merge_env_kwargs,
+    parse_seeds,
+)
 
 
 def _build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    parser = command_parser(
+        "consistency", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--env-id", default="EKFSLAM-v0")
     parser.add_argument("--agents", default="random,circle", help="comma-separated agent names")
     parser.add_argument(
         "--filters", default="ekf", help=f"comma-separated filter variants ({', '.join(VARIANTS)})"
     )
-    parser.add_argument("--seeds", default="0-49", type=parse_seeds)
-    parser.add_argument("--steps", type=int, default=200)
-    parser.add_argument("--env-kwargs", type=json.loads, default=None, help="config overrides as JSON")
+    parser.add_argument("--seeds", default="0-49", type=parse_seeds, help="one run per seed: A-B or A,B,C")
+    parser.add_argument("--steps", type=int, default=200, help="control steps per run")
+    parser.add_argument("--env-kwargs", type=json_object, default=None, help="config overrides as JSON")
     parser.add_argument("--model", default=None, help="the saved policy, for the ppo agent")
     parser.add_argument("--json", action="store_true", help="one JSON object on the last line of stdout")
     parser.add_argument("--plot", default=None, metavar="FILE.png", help="the three quantities over time")
@@ -67,11 +74,12 @@ def plot_runs(runs: list[ConsistencyRun], path: str) -> None:
     plt.close(fig)
 
 
+@command_line("consistency")
 def main(argv: Sequence[str] | None = None) -> int:
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401  (registers the ids)
-    from ekfslam_gym.agents import AGENTS, make_agent
+    from ekfslam_gym.agents import AGENTS
 
     parser = _build_parser()
     args = parser.parse_args(argv)
@@ -85,10 +93,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error("--steps must be positive")
     if "ppo" in agents and not args.model:
         parser.error("the ppo agent needs --model PATH")
+    check_env_flags(parser, args.env_id, args.env_kwargs)
 
     runs = []
     for name in agents:
-        agent = make_agent(name, model_path=args.model) if name == "ppo" else make_agent(name)
+        agent = agent_from_flags(parser, name, {}, model=args.model if name == "ppo" else None)
         # A policy runs on its recorded env settings (its observation above all), as evaluate runs it; the
         # step limit is --steps and a macro action is sampled per control step.
         trained = dict(getattr(agent, "trained_env_kwargs", None) or {})

@@ -2,14 +2,16 @@
 
 Usage::
 
-    python -m ekfslam_gym.evaluate --agent greedy                       # the held-out suite, a text summary
+    python -m ekfslam_gym.evaluate --agent greedy                       # the evaluation seeds, a text summary
+    python -m ekfslam_gym.evaluate --agent greedy --seeds heldout       # the held-out suite: the final table
     python -m ekfslam_gym.evaluate --agent ppo --model models/ppo_EKFSLAM-v0.zip --json
     python -m ekfslam_gym.evaluate --compare --model models/ppo_EKFSLAM-v0.zip --table results.md --plot results.png
     python -m ekfslam_gym.evaluate --agent random,circle --seeds 0-9 --max-episode-steps 100 --gif gifs/
     python -m ekfslam_gym.evaluate --agent greedy --seeds 0-4 --export-tum tum/   # then: evo_ape tum ...
 
-The default seeds are the held-out suite (10000-10049). The metrics are described in
-``ekfslam_gym.evaluation.episodes``, the JSON output in ``ekfslam_gym.evaluation.report``. ``--export-tum DIR``
+The default seeds are the evaluation seeds (20000-20049); the held-out suite (10000-10049), for the final
+table only, is asked for by name, ``--seeds heldout`` (``ekfslam_gym.seeds``). The metrics are described in
+``ekfslam_gym.evaluation.episode_metrics``, the JSON output in ``ekfslam_gym.evaluation.report``. ``--export-tum DIR``
 writes, per episode, ``<agent>_<seed>_true.tum`` and ``<agent>_<seed>_estimate.tum`` (TUM trajectories: the
 poses after each step at step * dt s, z = 0, the heading as a quaternion about z; evo's APE on them without
 alignment is the ``ate`` metric) and ``<agent>_<seed>_landmarks.csv`` (``ekfslam_gym.data.tum``).
@@ -25,24 +27,31 @@ from pathlib import Path
 from typing import Any
 
 from ..evaluation.aggregate import summary
-from ..evaluation.episodes import (
-    ASSOCIATION_KEYS,
-    HELD_OUT_SEEDS,
-    METRIC_KEYS,
-    NEES_STEP_BOUNDS,
-    SMOOTHER_KEYS,
-    evaluate_agent,
-)
+from ..evaluation.episode_metrics import ASSOCIATION_KEYS, METRIC_KEYS, NEES_STEP_BOUNDS
 from ..evaluation.report import json_safe, markdown_table, plot_results, text_summary
-from .common import merge_env_kwargs, parse_seeds
+from ..evaluation.rollout import evaluate_agent
+from ..evaluation.smoothing import SMOOTHER_KEYS
+from ..seeds import EVAL_SEEDS, HELD_OUT, SUITES, span, suite_name
+from .common import (
+    agent_from_flags,
+    check_env_flags,
+    command_line,
+    command_parser,
+    json_object,
+    merge_env_kwargs,
+    parse_seeds,
+)
+
+FORMATS = ("blocks", "table", "json")
 
 
 def _build_parser() -> argparse.ArgumentParser:
     from ekfslam_gym.agents import AGENTS
 
-    parser = argparse.ArgumentParser(
-        prog="python -m ekfslam_gym.evaluate",
-        description="Evaluate agents on a seed suite (default: the held-out seeds 10000-10049).",
+    parser = command_parser(
+        "evaluate",
+        description=f"Evaluate agents on a seed suite (default: the evaluation seeds {span(EVAL_SEEDS)}; the "
+        f"held-out suite {HELD_OUT} by name, --seeds heldout).",
     )
     parser.add_argument("--agent", default=None,
                         help=f"an agent or a comma-separated list (a comparison); one of {', '.join(AGENTS)}")  # fmt: skip
@@ -56,15 +65,20 @@ def _build_parser() -> argparse.ArgumentParser:
         "--per-model", action="store_true", help="one row per --model instead of pooling them"
     )
     parser.add_argument("--env-id", default="EKFSLAM-v0")
-    parser.add_argument("--env-kwargs", type=json.loads, default=None,
+    parser.add_argument("--env-kwargs", type=json_object, default=None,
                         help='config overrides as JSON, e.g. \'{"world": {"n_landmarks": 50}}\'; a trained policy '
                              "runs on its own training env settings (read beside the model) with these on top")  # fmt: skip
-    parser.add_argument("--agent-kwargs", type=json.loads, default=None,
+    parser.add_argument("--agent-kwargs", type=json_object, default=None,
                         help='constructor arguments per agent as JSON, e.g. \'{"circle": {"radius": 2.0}}\'')  # fmt: skip
-    parser.add_argument("--seeds", type=parse_seeds, default=list(HELD_OUT_SEEDS),
-                        help="A-B (inclusive) or A,B,C; default the held-out suite 10000-10049")  # fmt: skip
+    parser.add_argument("--seeds", type=parse_seeds, default=list(EVAL_SEEDS),
+                        help=f"A-B (inclusive), A,B,C or a suite's name ({', '.join(SUITES)}); default the "
+                             f"evaluation seeds {span(EVAL_SEEDS)}; heldout is {HELD_OUT}, for the final table only")  # fmt: skip
     parser.add_argument("--max-episode-steps", type=int, default=None, help="shorter episodes (smoke tests)")
-    parser.add_argument("--json", action="store_true", help="print exactly one JSON object to stdout")
+    parser.add_argument("--format", choices=FORMATS, default=None,
+                        help="what stdout shows: blocks (one per agent: IQM, CI and mean of every metric; the "
+                             "default), table (one markdown table, a row per agent) or json (exactly one JSON "
+                             "object)")  # fmt: skip
+    parser.add_argument("--json", action="store_true", help="the same as --format json")
     parser.add_argument("--gif", metavar="DIR", default=None, help="write one GIF per episode to DIR")
     parser.add_argument("--gif-stride", type=int, default=2, help="keep every n-th frame in GIFs")
     parser.add_argument("--gif-scale", type=float, default=1.0, help="resize GIF frames by this factor")
@@ -86,7 +100,7 @@ def _build_parser() -> argparse.ArgumentParser:
 
 def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tuple[str, list[Any]]]:
     """(row label, agents whose episodes form that row); several agents in a row only for pooled PPO models."""
-    from ekfslam_gym.agents import AGENTS, BASELINES, make_agent
+    from ekfslam_gym.agents import AGENTS, BASELINES
 
     if args.compare:
         names = list(BASELINES) + (["ppo"] if args.model else [])
@@ -100,17 +114,20 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
     if len(set(names)) != len(names):
         parser.error("an agent is listed twice")
     per_agent = args.agent_kwargs or {}
-    if not isinstance(per_agent, dict) or any(not isinstance(v, dict) for v in per_agent.values()):
+    if not_objects := sorted(k for k, v in per_agent.items() if not isinstance(v, dict)):
         parser.error(
-            '--agent-kwargs must be a JSON object keyed by agent name, e.g. \'{"circle": {"radius": 2}}\''
+            f"--agent-kwargs: the value of {', '.join(map(repr, not_objects))} is not a JSON object; it must "
+            'map agent names to their arguments, e.g. \'{"circle": {"radius": 2}}\''
         )
+    if not_evaluated := sorted(set(per_agent) - set(names)):
+        parser.error(f"--agent-kwargs: {not_evaluated} not among the agents evaluated, {names}")
     entries = []
     for name in names:
         kwargs = dict(per_agent.get(name, {}))
         if name == "ppo":
             if not args.model:
                 parser.error("the ppo agent needs --model PATH")
-            models = [make_agent("ppo", model_path=path, **kwargs) for path in args.model]
+            models = [agent_from_flags(parser, "ppo", kwargs, model=path) for path in args.model]
             if args.per_model and len(models) > 1:
                 names = [Path(p).with_suffix("").name for p in args.model]
                 if len(set(names)) < len(names):  # e.g. every run's best_model.zip: name them by their run
@@ -119,19 +136,24 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
             else:
                 entries.append(("ppo", models))
         else:
-            entries.append((name, [make_agent(name, **kwargs)]))
+            entries.append((name, [agent_from_flags(parser, name, kwargs)]))
     return entries
 
 
+@command_line("evaluate")
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _build_parser()
     args = parser.parse_args(argv)
+    if args.json and args.format not in (None, "json"):
+        parser.error(f"--json is --format json; it contradicts --format {args.format}")
+    output = "json" if args.json else args.format or "blocks"
     entries = _agent_entries(args, parser)
     if any(label.startswith("ppo") for label, _ in entries):
         import torch
 
         torch.set_num_threads(1)  # small MLP policies: threads only contend with the other cores' work
 
+    check_env_flags(parser, args.env_id, args.env_kwargs)
     for _, agent_list in entries:
         for agent in agent_list:
             trained_id = getattr(agent, "trained_env_id", None)
@@ -176,9 +198,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         path = Path(args.table)
         path.parent.mkdir(parents=True, exist_ok=True)
         seeds = args.seeds
-        held_out = " (the held-out suite)" if list(seeds) == list(HELD_OUT_SEEDS) else ""
+        names = {"heldout": " (the held-out suite)", "eval": " (the evaluation seeds)"}
+        named = names.get(suite_name(seeds) or "", "")
         path.write_text(
-            f"`{args.env_id}`, seeds {seeds[0]}-{seeds[-1]}{held_out}, {len(seeds)} episodes per agent.\n\n"
+            f"`{args.env_id}`, seeds {span(seeds)}{named}, {len(seeds)} episodes per agent.\n\n"
             + markdown_table(summaries, keys)
         )
     if args.plot:
@@ -186,17 +209,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.episodes_json:
         Path(args.episodes_json).write_text(json.dumps(json_safe(episodes), indent=1))
 
-    if args.json:
+    if output == "json":
         out: Any = next(iter(summaries.values())) if len(summaries) == 1 else summaries
         print(json.dumps(json_safe(out), allow_nan=False))
+    elif output == "table":
+        print(f"`{args.env_id}`, {len(args.seeds)} seeds ({args.seeds[0]}..{args.seeds[-1]})\n")
+        print(markdown_table(summaries, keys), end="")
     else:
         print(f"{args.env_id}, {len(args.seeds)} seeds ({args.seeds[0]}..{args.seeds[-1]})")
         for s in summaries.values():
             print(text_summary(s))
         print(f"pose NEES per-step 95 % bounds: [{NEES_STEP_BOUNDS[0]:.3f}, {NEES_STEP_BOUNDS[1]:.2f}]")
-        if len(summaries) > 1:
-            print()
-            print(markdown_table(summaries, keys), end="")
     return 0
 
 

@@ -1,34 +1,46 @@
 """Solve a pose graph from the command line.
 
-    python -m ekfslam_gym.graph FILE [--solver gn|lm] [--json] [--plot FILE.png] [--backend NAME]
+    python -m ekfslam_gym.graph FILE [--solver gn|lm] [--settings auto|course|gtsam] [--json] [--plot FILE.png]
+                                     [--backend NAME]
 
-FILE is a course MAT graph (``.dat``) or a 2-D g2o file (``.g2o``). ``--json`` prints exactly one JSON object
+FILE is a course MAT graph (``.dat``), a 2-D g2o file (``.g2o``) or a GTSAM 2-D dataset (``.txt``/``.graph``,
+e.g. Victoria Park). ``--settings gtsam`` optimises as GTSAM does (its Pose2 retraction, and for LM its λ
+schedule, `GTSAM_LM`); ``auto`` picks it for GTSAM files and the course's settings otherwise. ``--json`` prints
+exactly one JSON object
 ``{"initial_error", "final_error", "iterations", "seconds", "poses", "landmarks"}``; errors are the course's
 F = Σ eᵀΩe and ``seconds`` times the optimisation alone (reading the file excluded).
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..data.graph_files import read_graph
+from ..data.graph_files import GTSAM_SUFFIXES, read_graph
 from ..evaluation.plotting import plot_graph_solution
-from ..graph.optimizer import optimize
+from ..graph.optimizer import GTSAM_LM, optimize
 from ..graph.sparse_solve import BACKENDS
+from .common import command_line, command_parser
 
 
+@command_line("graph")
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m ekfslam_gym.graph", description=__doc__.split("\n\n")[0])
-    parser.add_argument("file", type=Path, help="graph file: .dat (course MAT) or .g2o")
+    parser = command_parser("graph", description=__doc__.split("\n\n")[0])
+    parser.add_argument("file", type=Path, help="graph file: .dat (course MAT), .g2o, or GTSAM .txt/.graph")
     parser.add_argument(
         "--solver", choices=("gn", "lm"), default="gn", help="Gauss-Newton or Levenberg-Marquardt"
     )
     parser.add_argument(
         "--backend", choices=("auto",) + BACKENDS, default="auto", help="sparse factorisation"
+    )
+    parser.add_argument(
+        "--settings",
+        choices=("auto", "course", "gtsam"),
+        default="auto",
+        help="optimiser conventions: the course's (x + dx) or GTSAM's (exp map; LM's lambda schedule); "
+        "auto: gtsam for .txt/.graph files",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object with the figures")
     parser.add_argument("--plot", type=Path, metavar="FILE.png", help="save a plot of the solution")
@@ -39,7 +51,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (OSError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
-    result = optimize(problem.graph, problem.initial, args.solver, backend=args.backend)
+    settings = args.settings
+    if settings == "auto":
+        settings = "gtsam" if args.file.suffix.lower() in GTSAM_SUFFIXES else "course"
+    options: dict[str, object] = {}
+    if settings == "gtsam":
+        options = dict(GTSAM_LM) if args.solver == "lm" else {"retraction": GTSAM_LM["retraction"]}
+    result = optimize(problem.graph, problem.initial, args.solver, backend=args.backend, **options)
 
     if args.json:
         summary = {
@@ -58,8 +76,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         for k, err in enumerate(result.errors):
             print(f"  iteration {k:3d}  error {err:.6f}")
+        if result.diverged:
+            print(
+                f"Gauss-Newton diverged: the error rose from {result.initial_error:.6g} to "
+                f"{result.final_error:.6g} ({result.final_error / result.initial_error:.3g} times) in "
+                f"{result.iterations} iterations without converging; try --solver lm"
+            )
         status = "converged" if result.converged else "stopped without converging"
-        print(f"{status} after {result.iterations} iterations in {result.seconds:.3f} s")
+        print(
+            f"{status} after {result.iterations} iterations in {result.seconds:.3f} s ({settings} settings)"
+        )
     if args.plot is not None:
         plot_graph_solution(args.plot, problem.initial, result, title=args.file.name)
     return 0

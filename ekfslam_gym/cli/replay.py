@@ -1,8 +1,11 @@
-"""Replay a drive through EKF-SLAM: the project's simulated drive by default, or course-format files.
+"""Replay a drive through EKF-SLAM: the project's simulated drive by default, course-format files, or a real
+robot's data set (``--dataset mrclam``, see ``cli.replay_real``).
 
     python -m ekfslam_gym.replay [--data PATH [--world PATH]] [--steps N] [--sequential]
         [--init {course,inverse}] [--seed S] [--json] [--save-state FILE.npz]
         [--plot FILE.png] [--gif FILE.gif] [--tum FILE]
+    python -m ekfslam_gym.replay --data MRCLAM_FOLDER [--dataset mrclam] [--variant {ekf,fej,iekf}]
+        [--association {known,nearest,jcbc}] [--robots] [--smoother] [--json] [--plot FILE.png]
 
 Defaults are the course's EKF-SLAM exercise (Freiburg *Robot Mapping*): R = diag(0.1, 0.1, 0.01) on the pose, Q = 0.01 I per reading, landmark
 prior 1000, zero pose prior at the origin, course initialisation, batch update, every block read (331 steps
@@ -31,6 +34,9 @@ from ..data.course import read_sensor_data, read_world
 from ..data.synthetic import simulate_drive
 from ..evaluation.replay import ReplayResult, export_tum, replay, summary, true_path_name
 from ..filter import FilterDivergedError
+from ..filter.settings import COURSE_SETTINGS, INIT_MODES
+from .common import command_line, command_parser
+from .replay_real import add_real_data_arguments, replay_real_data, resolve_dataset
 
 MAX_GIF_FRAMES = 80  # enough for a smooth loop, few enough to render in seconds
 
@@ -67,8 +73,8 @@ def _report(result: ReplayResult, source: str, n_readings: int) -> str:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="python -m ekfslam_gym.replay",
+    parser = command_parser(
+        "replay",
         description="Replay a drive through EKF-SLAM with the course's parameters. Without --data it replays "
         "the project's simulated drive (seeded by --seed).",
     )
@@ -85,11 +91,12 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--sequential", action="store_true", help="one update per reading instead of a batch")
     parser.add_argument(
         "--init",
-        choices=("course", "inverse"),
-        default="course",
+        choices=INIT_MODES,
+        default=COURSE_SETTINGS.init_mode,
         help="landmark initialisation (default course)",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object to stdout, nothing else")
+    add_real_data_arguments(parser)
     parser.add_argument("--save-state", type=Path, metavar="FILE.npz", help="write mean, cov and log_det")
     parser.add_argument("--plot", type=Path, metavar="FILE.png", help="draw the final belief")
     parser.add_argument("--gif", type=Path, metavar="FILE.gif", help="animate the belief over the drive")
@@ -113,10 +120,13 @@ def _check_output(parser: argparse.ArgumentParser, path: Path | None, suffix: st
         parser.error(f"{option}: directory {path.parent} does not exist")
 
 
+@command_line("replay")
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point; returns the exit status (usage errors exit 2 through ``parser.error``)."""
     parser = _parser()
     args = parser.parse_args(argv)
+    if resolve_dataset(parser, args) != "course":
+        return replay_real_data(parser, args)
     if args.world is not None and args.data is None:
         parser.error("--world needs --data (the simulated drive brings its own world)")
     if args.seed is not None and args.data is not None:

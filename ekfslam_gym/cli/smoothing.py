@@ -1,6 +1,6 @@
 """Filter vs the full-SLAM smoother on env episodes (see ``ekfslam_gym.evaluation.smoothing``).
 
-python -m ekfslam_gym.smoothing [--env-id EKFSLAM-v0] [--seeds 10000-10004] [--agent circle] [--json]
+python -m ekfslam_gym.smoothing [--env-id EKFSLAM-v0] [--seeds 20000-20004] [--agent circle] [--json]
 """
 
 from __future__ import annotations
@@ -9,30 +9,33 @@ import argparse
 import json
 import sys
 
-from ..evaluation.episodes import EpisodeRecorder, run_episode
-from ..evaluation.smoothing import compare_with_smoother
-from .common import parse_seeds
+from ..evaluation.rollout import run_episode
+from ..evaluation.smoothing import EpisodeRecorder, compare_with_smoother
+from ..seeds import EVAL_SEEDS, span
+from .common import agent_from_flags, check_env_flags, command_line, command_parser, parse_seeds
 
 
+@command_line("smoothing")
 def main(argv: list[str] | None = None) -> int:
     import gymnasium as gym
 
-    import ekfslam_gym  # noqa: F401
-    from ekfslam_gym.agents import make_agent
+    import ekfslam_gym  # noqa: F401  (registers the ids)
 
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    parser = command_parser(
+        "smoothing", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--env-id", default="EKFSLAM-v0")
-    parser.add_argument("--agent", default="circle")
-    parser.add_argument("--seeds", default="10000-10004")
-    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--env-id", default="EKFSLAM-v0", help="the registered env to drive")
+    parser.add_argument("--agent", default="circle", help="the agent that drives every episode")
+    parser.add_argument("--seeds", default=span(EVAL_SEEDS[:5]), type=parse_seeds,
+                        help="evaluation seeds by default; A-B, A,B,C or a suite's name (heldout, eval)")  # fmt: skip
+    parser.add_argument("--json", action="store_true", help="print one JSON list of the per-seed rows")
     args = parser.parse_args(argv)
+    check_env_flags(parser, args.env_id)
     rows = []
-    for seed in parse_seeds(args.seeds):
+    for seed in args.seeds:
         env = gym.make(args.env_id)
         recorder = EpisodeRecorder()
-        run_episode(env, make_agent(args.agent), seed, recording=recorder)
+        run_episode(env, agent_from_flags(parser, args.agent, {}), seed, recording=recorder)
         rows.append({"seed": seed, **compare_with_smoother(recorder, env)})
     if args.json:
         print(json.dumps(rows))

@@ -6,8 +6,8 @@ Usage::
     python -m ekfslam_gym.sweep --env-ids EKFSLAM-v0,EKFSLAM-Loop-v0 --seeds 0-2 --address auto --json
 
 Each (env id, seed) trains as ``python train.py --config CONFIG --env-id ID --seed S`` would (into
-``OUT/<env-id>_seed<S>/``) and its final model is evaluated on ``--eval-seeds`` (default 20000-20009; the
-held-out suite 10000-10049 is refused). Finished trials are skipped, interrupted ones resume (see
+``OUT/<env-id>_seed<S>/``) and its final model is evaluated on ``--eval-seeds`` (default the evaluation seeds
+20000-20009; the held-out suite 10000-10049 is refused: ``ekfslam_gym.seeds``). Finished trials are skipped, interrupted ones resume (see
 ``ekfslam_gym.agents.sweep``). ``OUT/sweep.json`` and ``OUT/sweep.md`` hold, per env id, the IQM with its 95 % bootstrap
 CI of every metric pooled over the seeds' episodes and per seed (``ekfslam_gym.evaluation.aggregate``).
 Progress goes to stderr; with ``--json`` the last line of stdout is the JSON object of ``sweep.json``:
@@ -27,14 +27,15 @@ from pathlib import Path
 from typing import Any
 
 from ..evaluation.aggregate import summary
-from ..evaluation.episodes import METRIC_KEYS
+from ..evaluation.episode_metrics import METRIC_KEYS
 from ..evaluation.report import json_safe, markdown_table
-from .common import parse_seeds
+from ..seeds import HELD_OUT, SELECTION_SEEDS, check_not_held_out, held_out_overlap, span
+from .common import command_line, command_parser, parse_seeds
 
 
 def _build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="python -m ekfslam_gym.sweep",
+    parser = command_parser(
+        "sweep",
         description="Train PPO over env ids x seeds on Ray (local or a cluster) and tabulate the evaluations.",
     )
     parser.add_argument("--env-ids", default="EKFSLAM-v0", help="env ids, comma-separated")
@@ -45,7 +46,7 @@ def _build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",
                         help="override entries of the config, values parsed as YAML (as train.py's)")  # fmt: skip
     parser.add_argument("--eval-seeds", type=parse_seeds, default=None,
-                        help="evaluation seeds, default 20000-20009; never the held-out 10000-10049")  # fmt: skip
+                        help=f"evaluation seeds, default {span(SELECTION_SEEDS)}; never the held-out {HELD_OUT}")  # fmt: skip
     parser.add_argument(
         "--out", type=Path, default=Path("runs/sweep"), help="sweep folder (default runs/sweep)"
     )
@@ -92,6 +93,7 @@ def markdown(report: Mapping[str, Any]) -> str:
     return "\n".join(parts)
 
 
+@command_line("sweep")
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _build_parser()
     args = parser.parse_args(argv)
@@ -100,12 +102,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     env_ids = [e.strip() for e in args.env_ids.split(",") if e.strip()]
     if not env_ids:
         parser.error("--env-ids names no env id")
-    eval_seeds = tuple(args.eval_seeds or sweep.EVAL_SEEDS)
-    if sweep.held_out_overlap(eval_seeds):
-        parser.error(
-            f"--eval-seeds {eval_seeds[0]}-{eval_seeds[-1]} overlap the held-out suite 10000-10049, which is for "
-            "the final table only (README, Evaluation); evaluate sweeps on 20000-20009 (the default)"
-        )
+    eval_seeds = tuple(args.eval_seeds or SELECTION_SEEDS)
+    try:
+        check_not_held_out(eval_seeds, "--eval-seeds")
+    except ValueError as error:
+        parser.error(str(error))
     if args.address is not None and args.workers is not None:
         parser.error("--workers sizes the local Ray; with --address the cluster's size decides")
     if args.workers is not None and args.workers < 1:
@@ -120,8 +121,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if int(entry["n_timesteps"]) <= 0:
             parser.error("--timesteps must be positive")
         for seed in args.seeds:
-            if sweep.held_out_overlap(range(seed, seed + int(entry["n_envs"]))):
-                parser.error(f"training seed {seed} seeds envs in the held-out suite 10000-10049")
+            if held_out_overlap(range(seed, seed + int(entry["n_envs"]))):
+                parser.error(f"training seed {seed} seeds envs in the held-out suite {HELD_OUT}")
             command = ["--config", str(args.config), "--env-id", env_id, "--seed", str(seed),
                        "--out", str(args.out / f"{env_id}_seed{seed}"), "--timesteps", str(entry["n_timesteps"]),
                        *(["--hyperparams", *args.hyperparams] if args.hyperparams else [])]  # fmt: skip

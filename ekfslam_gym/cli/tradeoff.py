@@ -24,6 +24,7 @@ from ..evaluation.tradeoff import (
     tradeoff_figure,
     write_csv,
 )
+from .common import command_line, command_parser
 
 
 def _reference_line(text: str) -> tuple[float, str]:
@@ -50,13 +51,14 @@ def _load(path: Path, label: str | None, x: str, y: str) -> list[Point]:
     return points_from_episodes(episodes, x, y, label if label is not None else path.stem)
 
 
+@command_line("tradeoff")
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m ekfslam_gym.tradeoff", description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )  # fmt: skip
+    parser = command_parser(
+        "tradeoff", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     metric_names = sorted(BETTER)
-    parser.add_argument("files", nargs="+", type=Path, metavar="FILE")
+    parser.add_argument("files", nargs="+", type=Path, metavar="FILE",
+                        help="evaluate --episodes-json files, or CSVs this command wrote")  # fmt: skip
     parser.add_argument(
         "--label", action="append", default=[], help="a group's name, one per JSON file, in order"
     )
@@ -67,7 +69,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--y", default="landmark_rmse", choices=metric_names, metavar="METRIC", help=metric_help
     )
-    parser.add_argument("--plot", type=Path, metavar="FILE.png")
+    parser.add_argument(
+        "--plot", type=Path, metavar="FILE.png", help="draw the points, their CIs and the front"
+    )
     parser.add_argument("--csv", type=Path, metavar="FILE.csv", help="write the points, to redraw them later")
     parser.add_argument("--ci", action="append", default=[], metavar="GROUP", help="draw this group's CIs")
     parser.add_argument(
@@ -78,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
                         help=line_help)  # fmt: skip
     parser.add_argument("--y-line", action="append", default=[], type=_reference_line, metavar="VALUE:TEXT",
                         help=line_help)  # fmt: skip
-    parser.add_argument("--title")
+    parser.add_argument("--title", help="the figure's title")
     args = parser.parse_args(argv)
 
     json_files = [f for f in args.files if not _is_csv(f)]

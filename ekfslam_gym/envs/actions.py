@@ -19,8 +19,8 @@ command the env offers two macro actions, each driven for up to ``action.hold`` 
 A macro step's reward is the sum of its control steps' rewards, in order; ``info["reward_terms"]`` holds
 each term summed over them (the information-gain terms still telescope), ``info["inner_steps"]`` how many
 ran and ``info["inner_actions"]`` the (forward, turn) commands they applied. The step limit
-(``max_episode_steps``) counts env steps, as every wrapper and library does: with ``hold`` h, 500 // h env steps
-last as long as the velocity interface's 500.
+(``max_episode_steps``) counts env steps, as every wrapper and library does; a registered id's limit is divided
+by ``hold`` when none is given, so that an episode lasts the same simulated time (``ekfslam_gym.envs.horizon``).
 """
 
 from __future__ import annotations

@@ -2,11 +2,11 @@
 ``EKFSLAMEnv.set_max_episode_steps`` replaces it, by a copy with another step limit).
 
 Sections: ``world`` (layout and landmarks), ``robot``, ``sensor`` and ``odometry`` (the simulator's own
-parameter classes), ``filter``, ``reward``, ``observation``, ``action``, and the episode settings at the top
-level. Build
-one from keyword overrides (``EnvConfig.from_overrides(world={"n_landmarks": 50})``) or a YAML file under
-``configs/env/`` (``EnvConfig.from_yaml(path)``); an unknown or invalid value raises ``ValueError`` naming the
-field, e.g. ``sensor.max_range``.
+parameter classes), ``filter`` (the filter's own ``FilterSettings``), ``reward``, ``observation``,
+``action``, and the episode settings at the top level. Build one from keyword overrides
+(``EnvConfig.from_overrides(world={"n_landmarks": 50})``) or a YAML file under ``configs/env/``
+(``EnvConfig.from_yaml(path)``); an unknown or invalid value raises ``ValueError`` naming the field, e.g.
+``sensor.max_range``.
 """
 
 from __future__ import annotations
@@ -18,9 +18,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..filter.settings import FilterSettings
 from ..sim.odometry import OdometryNoise
 from ..sim.robot import RobotParams
 from ..sim.sensor import SensorParams
+from .presets import PRESETS
 from .rewards import REWARD_TERMS
 
 
@@ -48,8 +50,9 @@ def _integer(name: str, value: Any, minimum: int) -> None:
 
 @dataclass(frozen=True)
 class WorldConfig:
-    """The layout generator (``arena``, ``rooms`` or ``loop``), the exact number of landmarks, and keyword
-    arguments passed to the generator (sizes in m, e.g. ``{"width": 20.0}``)."""
+    """The layout generator (``arena``, ``rooms``, ``loop``, or ``surveyed`` with the landmark positions given),
+    the exact number of landmarks, and keyword arguments passed to the generator (sizes in m, e.g.
+    ``{"width": 20.0}``)."""
 
     layout: str = "arena"
     n_landmarks: int = 30
@@ -69,98 +72,26 @@ class WorldConfig:
         object.__setattr__(self, "layout_kwargs", dict(self.layout_kwargs))
 
 
+# The env's ``filter`` section is the filter's own settings object, with the filter's defaults.
+FilterConfig = FilterSettings
+
+
 @dataclass(frozen=True)
-class FilterConfig:
-    """The EKF-SLAM inside the env.
+class RewardConfig:
+    """Weights of the reward terms (``ekfslam_gym.envs.rewards.REWARD_TERMS`` says what each term is). The
+    reward is the sum of the terms times their weights; ``info["reward_terms"]`` reports every term unweighted,
+    whatever its weight. The fields are REWARD_TERMS' names and defaults, in its order (a test holds them so)."""
 
-    motion_model: ``wheels`` (the default: wheel-encoder travels with a sideways slip, which reads a slide
-    along a wall as a slip rather than as large turns; the simulator's default ``WheelOdometryNoise``),
-    ``odometry`` (turn-drive-turn with Thrun's alpha noise, the course's model; the default until the wheels
-    model was shown consistent under every kind of driving, see the README's *Filter consistency*) or
-    ``velocity`` (v, omega). variant: where the
-    filter linearises: ``ekf`` (the default), ``fej`` (first-estimates Jacobians, Huang, Mourikis &
-    Roumeliotis 2010: no spurious information about the unobservable global pose) or ``iekf`` (the correction
-    iterated by Gauss-Newton, at most ``iterations`` linearisations); all keep the exact running log det.
-    init_mode: ``inverse`` (the standard for a simulated robot) or ``course``. landmark_prior: variance (m^2) at
-    which every unseen landmark is carried, so log det Sigma is finite and discovering a landmark pays a
-    bounded amount. pose_prior: initial pose variance (m^2 and rad^2; small and positive, so Sigma_0 is
-    definite; the filter starts at the true pose). resync_every: filter calls between exact Cholesky re-synchronisations of the running log det.
-    association: how readings find their landmarks: ``known`` (the sensor's ids, the default; clutter is
-    dropped, as an oracle would), ``nearest`` (each reading alone takes its most likely landmark inside the
-    gate) or ``jcbc`` (joint compatibility branch and bound, Neira & Tardos 2001), the latter two from the
-    readings alone (``ekfslam_gym.filter.association``). gate_prob: probability of the chi-squared association
-    gates. new_gate_prob (>= gate_prob): a reading that matches nothing and lies outside this gate of every
-    landmark starts a new one in a free slot; between the gates it is discarded. confirm_steps: a new landmark
-    not matched again within this many control steps is forgotten (its slot freed, so clutter does not fill
-    the map; 0: never).
-    """
-
-    motion_model: str = "wheels"
-    variant: str = "ekf"
-    iterations: int = 5
-    init_mode: str = "inverse"
-    update: str = "batch"
-    landmark_prior: float = 100.0
-    pose_prior: float = 1e-10
-    resync_every: int = 1000
-    association: str = "known"
-    gate_prob: float = 0.99
-    new_gate_prob: float = 0.999
-    confirm_steps: int = 5
+    info_gain: float = 1.0  # per nat of log det Sigma dropped
+    collision: float = 1.0  # per control step in contact with a wall
+    step_cost: float = 0.0  # per control step
+    coverage: float = 0.0  # per m^2 looked at for the first time
+    pose_variance: float = 0.0  # per m^2 of the pose estimate's position variance, each control step
 
     def __post_init__(self) -> None:
-        _require(self.motion_model in ("odometry", "velocity", "wheels"), "filter.motion_model", "must be odometry|velocity|wheels", self.motion_model)  # fmt: skip
-        _require(
-            self.variant in ("ekf", "fej", "iekf"), "filter.variant", "must be ekf|fej|iekf", self.variant
-        )
-        _integer("filter.iterations", self.iterations, 1)
-        _require(
-            self.init_mode in ("inverse", "course"),
-            "filter.init_mode",
-            "must be inverse|course",
-            self.init_mode,
-        )
-        _require(
-            self.update in ("batch", "sequential"), "filter.update", "must be batch|sequential", self.update
-        )
-        _positive("filter.landmark_prior", self.landmark_prior)
-        _positive("filter.pose_prior", self.pose_prior)
-        _integer("filter.resync_every", self.resync_every, 0)
-        _require(
-            self.association in ("known", "nearest", "jcbc"),
-            "filter.association",
-            "must be known|nearest|jcbc",
-            self.association,
-        )
-        for name in ("gate_prob", "new_gate_prob"):
-            value = getattr(self, name)
-            _require(isinstance(value, (int, float)) and 0.0 < value < 1.0, f"filter.{name}", "must be in (0, 1)", value)  # fmt: skip
-        _integer("filter.confirm_steps", self.confirm_steps, 0)
-        _require(
-            self.new_gate_prob >= self.gate_prob, "filter.new_gate_prob", "must be >= filter.gate_prob",
-            self.new_gate_prob,
-        )  # fmt: skip
-
-
-def _check_reward_weights(self: Any) -> None:
-    for term in REWARD_TERMS:
-        value = getattr(self, term.name)
-        _require(isinstance(value, (int, float)) and math.isfinite(value), f"reward.{term.name}", "must be finite", value)  # fmt: skip
-
-
-# The fields come from REWARD_TERMS, the list that also picks the env's reward hooks, so the two cannot drift.
-RewardConfig = dataclasses.make_dataclass(
-    "RewardConfig",
-    [(term.name, float, field(default=term.default)) for term in REWARD_TERMS],
-    frozen=True,
-    namespace={
-        "__module__": __name__,
-        "__post_init__": _check_reward_weights,
-        "__doc__": "Weights of the reward terms; the reward is the sum of the terms with a non-zero weight and "
-        '``info["reward_terms"]`` names each (``ekfslam_gym.envs.rewards.REWARD_TERMS`` lists them).\n\n'
-        + "\n".join(f"{term.name} (default {term.default}): {term.meaning}." for term in REWARD_TERMS),
-    },
-)
+        for term in REWARD_TERMS:
+            value = getattr(self, term.name)
+            _require(isinstance(value, (int, float)) and math.isfinite(value), f"reward.{term.name}", "must be finite", value)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -235,16 +166,20 @@ class ActionConfig:
 
     kind: ``velocity`` (the (forward, turn) command), ``primitives`` (one of the greedy planner's motion
     primitives, ``Discrete``) or ``waypoint`` (a goal relative to the estimated pose, driven by a scan-only
-    controller). hold: control steps per env step, at most for a waypoint (default 1 for velocity, 10 for the
-    others). waypoint_radius: m, the reach of a waypoint goal (the action's unit). guard: m, primitives only: a
-    control step whose forward travel would bring the robot within this distance of a wall the scan shows
-    ahead turns without driving forward, and one that finds the robot already that near backs off, so the robot
-    stops short of walls instead of sliding along them (a contact costs the odometry a slip; 0, the default, is
-    off).
+    controller). hold: control steps per env step, at most for a waypoint; left out (None), the kind's default
+    (``DEFAULT_HOLD``: 1 for velocity, 10 for the others), which the built config holds, so ``hold`` always
+    reports the effective number; a change of ``kind`` without a ``hold`` takes the new kind's default.
+    waypoint_radius: m, the reach of a waypoint goal (the action's unit). guard: m, primitives only: a control
+    step whose forward travel would bring the robot within this distance of a wall the scan shows ahead turns
+    without driving forward, and one that finds the robot already that near backs off, so the robot stops
+    short of walls instead of sliding along them, where every contact costs the wheel odometry a slip (0, the
+    default, is off). Pick it to cut wall contacts: trained under a guard of 0.2 m the Large recipe touched
+    walls a quarter as often, at a small cost in map accuracy (docs/results.md, *A guard that stops short of
+    walls*).
     """
 
     kind: str = "velocity"
-    hold: int | None = None
+    hold: int | None = field(default=None, metadata={"default_follows": "kind"})
     waypoint_radius: float = 3.0
     guard: float = 0.0
 
@@ -252,8 +187,9 @@ class ActionConfig:
         _require(
             self.kind in ACTION_KINDS, "action.kind", f"must be one of {'|'.join(ACTION_KINDS)}", self.kind
         )
-        if self.hold is not None:
-            _integer("action.hold", self.hold, 1)
+        if self.hold is None:
+            object.__setattr__(self, "hold", DEFAULT_HOLD[self.kind])
+        _integer("action.hold", self.hold, 1)
         _positive("action.waypoint_radius", self.waypoint_radius)
         _non_negative("action.guard", self.guard)
         _require(self.guard == 0 or self.kind == "primitives", "action.guard", "applies to action.kind primitives "
@@ -261,8 +197,8 @@ class ActionConfig:
 
     @property
     def steps(self) -> int:
-        """Control steps per env step (at most, for a waypoint)."""
-        return self.hold if self.hold is not None else DEFAULT_HOLD[self.kind]
+        """Control steps per env step (at most, for a waypoint): ``hold``."""
+        return self.hold
 
 
 @dataclass(frozen=True)
@@ -281,7 +217,7 @@ class EnvConfig:
     robot: RobotParams = field(default_factory=RobotParams)
     sensor: SensorParams = field(default_factory=SensorParams)
     odometry: OdometryNoise = field(default_factory=OdometryNoise)
-    filter: FilterConfig = field(default_factory=FilterConfig)
+    filter: FilterSettings = field(default_factory=FilterSettings)
     reward: RewardConfig = field(default_factory=RewardConfig)
     observation: ObservationConfig = field(default_factory=ObservationConfig)
     action: ActionConfig = field(default_factory=ActionConfig)
@@ -299,6 +235,8 @@ class EnvConfig:
         _require(isinstance(self.terminate_on_collision, bool), "terminate_on_collision", "must be a bool", self.terminate_on_collision)  # fmt: skip
         _non_negative("done_std", self.done_std)
         _integer("loop_gap", self.loop_gap, 1)
+        # The env's reward needs log det Sigma finite from the start: the course's zero pose prior is no option.
+        _positive("filter.pose_prior", self.filter.pose_prior)
 
     # ------------------------------------------------------------------ building
     @classmethod
@@ -307,8 +245,9 @@ class EnvConfig:
         return _replace(base if base is not None else cls(), overrides, "")
 
     @classmethod
-    def from_yaml(cls, path: str | Path, **overrides: Any) -> EnvConfig:
-        """Load a YAML file of (possibly partial) sections, then apply ``overrides`` on top."""
+    def from_yaml(cls, path: str | Path, base: EnvConfig | None = None, **overrides: Any) -> EnvConfig:
+        """Load a YAML file of (possibly partial) sections onto ``base`` (default: the defaults), then apply
+        ``overrides`` on top."""
         import yaml
 
         path = Path(path)
@@ -318,7 +257,7 @@ class EnvConfig:
         if not isinstance(data, Mapping):
             raise ValueError(f"{path}: the top level must be a mapping of config sections")
         try:
-            config = cls.from_overrides(**data)
+            config = cls.from_overrides(base, **data)
         except ValueError as error:
             raise ValueError(f"{path}: {error}") from None
         return cls.from_overrides(config, **overrides)
@@ -326,6 +265,28 @@ class EnvConfig:
     def to_dict(self) -> dict[str, Any]:
         """A plain nested dict (YAML- and JSON-friendly) that ``from_overrides(**d)`` turns back into this."""
         return dataclasses.asdict(self)
+
+
+def build_config(
+    config: EnvConfig | str | Path | Mapping[str, Any] | None,
+    preset: str | None,
+    overrides: Mapping[str, Any],
+) -> EnvConfig:
+    """The env's configuration: a mapping of sections or a YAML file of them merged onto ``preset``'s (a
+    registered id, ``ekfslam_gym.envs.presets``; None: the defaults), or a complete ``EnvConfig`` as it is;
+    then ``overrides`` on top."""
+    if preset is not None and preset not in PRESETS:
+        raise ValueError(f"unknown preset {preset!r}; known: {sorted(PRESETS)} or None (the defaults)")
+    if isinstance(config, EnvConfig):
+        return EnvConfig.from_overrides(config, **overrides)
+    base = EnvConfig.from_overrides(**PRESETS[preset]) if preset is not None else EnvConfig()
+    if isinstance(config, (str, Path)):
+        return EnvConfig.from_yaml(config, base, **overrides)
+    if isinstance(config, Mapping):
+        return EnvConfig.from_overrides(EnvConfig.from_overrides(base, **config), **overrides)
+    if config is None:
+        return EnvConfig.from_overrides(base, **overrides)
+    raise TypeError(f"config must be an EnvConfig, a YAML path or a mapping, got {type(config).__name__}")
 
 
 def _replace(obj: Any, overrides: Mapping[str, Any], prefix: str) -> Any:
@@ -346,6 +307,12 @@ def _replace(obj: Any, overrides: Mapping[str, Any], prefix: str) -> Any:
             raise ValueError(f"{prefix}{key} must be a mapping of its fields, got {value!r}")
         else:
             changes[key] = _coerce(value, current, f"{prefix}{key}")
+    for name, f in fields.items():
+        # A field whose default depends on another (action.hold on action.kind) returns to its default when
+        # that one changes and it is not given itself.
+        leader = f.metadata.get("default_follows")
+        if leader in changes and name not in changes and changes[leader] != getattr(obj, leader):
+            changes[name] = f.default
     try:
         return dataclasses.replace(obj, **changes)
     except (ValueError, TypeError) as error:

@@ -3,26 +3,15 @@
 Layout of the flat vector (``ObservationLayout`` is its one definition: the Box and Dict spaces, the compiled
 kernel and the agents all read it; the Dict variant uses the same names):
 
-========== ====== ================================================================================================
-part       size   contents (all clipped to [-CLIP, CLIP])
-========== ====== ================================================================================================
-pose       4      estimated (x, y) relative to the world's centre / half its larger side; sin and cos of heading
-pose_cov   3      ln of the pose variances (x, y, theta) / 10
-landmarks  4 k    the k seen landmarks nearest the pose estimate, nearest first: [seen flag, x and y of the
-                  estimate in the robot's frame / sensor max_range, ln(trace of its 2x2 covariance / 2) / 10];
-                  slots beyond the seen landmarks are all zero
-globals    3      mean ln variance of the map (ln det Sigma_mm / 2n / 10), fraction of landmarks seen, time left
-                  (1 at reset, falling linearly to exactly 0 at the episode's step limit)
-scan       B      wall distances along B beams fixed to the robot / scan_max_range (1 = nothing within range)
-coverage   G*G    a robot-centred window, turned with the estimated heading and reaching grid_extent m each
-                  side, of the coverage memory: 1 where the sensor has looked (a memory cell whose centre was
-                  within range and field of view of the pose *estimate* at some step; walls ignored, the
-                  belief has none) or outside the world, else 0. Row-major: row 0 is furthest to the left,
-                  column 0 furthest behind, so the robot faces along the rows towards the last column
-coverage_  C*C    the same, coarser and wider (coarse_grid cells reaching coarse_extent m): each cell the
-coarse            fraction of it looked at, so that beyond the fine window the robot still knows where the
-                  unexplored part of the world lies (0 disables it)
-========== ====== ================================================================================================
+| part | size | contents (all clipped to [-CLIP, CLIP]) |
+|---|---|---|
+| `pose` | 4 | estimated (x, y) relative to the world's centre / half its larger side; sin and cos of heading |
+| `pose_cov` | 3 | ln of the pose variances (x, y, theta) / 10 |
+| `landmarks` | 4 k | the k seen landmarks nearest the pose estimate, nearest first: [seen flag, x and y of the estimate in the robot's frame / sensor max_range, ln(trace of its 2x2 covariance / 2) / 10]; slots beyond the seen landmarks are all zero |
+| `globals` | 3 | mean ln variance of the map (ln det Sigma_mm / 2n / 10), fraction of landmarks seen, time left (1 at reset, falling linearly to exactly 0 at the episode's step limit) |
+| `scan` | B | wall distances along B beams fixed to the robot / scan_max_range (1 = nothing within range) |
+| `coverage` | G*G | a robot-centred window, turned with the estimated heading and reaching grid_extent m each side, of the coverage memory: 1 where the sensor has looked (a memory cell whose centre was within range and field of view of the pose *estimate* at some step; walls ignored, the belief has none) or outside the world, else 0. Row-major: row 0 is furthest to the left, column 0 furthest behind, so the robot faces along the rows towards the last column |
+| `coverage_coarse` | C*C | the same, coarser and wider (coarse_grid cells reaching coarse_extent m): each cell the fraction of it looked at, so that beyond the fine window the robot still knows where the unexplored part of the world lies (0 disables it) |
 
 Everything is computed by one compiled kernel writing into a preallocated vector: the env is stepped millions
 of times and each numpy call costs microseconds.
@@ -38,18 +27,11 @@ the coverage window (row 0 furthest to the left, column 0 furthest behind). It i
 convolutional policy (``ekfslam_gym.agents.extractors.BeliefCNN``), drawn from the belief alone, never from the true pose,
 landmarks or walls:
 
-======= ===============================================================================================
-channel contents
-======= ===============================================================================================
-0       the coverage memory as above, each cell the fraction of it looked at (1 outside the world)
-1       every seen landmark's *estimate* in the cell holding it, valued by its certainty
-        1 / (1 + sqrt(tr Sigma_jj) / cell size) (1/2 when the expected position error is one cell; the
-        largest where several share a cell); 0 elsewhere
-2       walls as the wall scan has seen them: a wall memory laid out like the coverage memory, where every
-        control step marks the cells of the scan's endpoints that hit a wall before ``scan_max_range``,
-        placed from the pose *estimate*; each image cell 1 if any memory cell under it holds a wall (and
-        outside the world), else 0
-======= ===============================================================================================
+| channel | contents |
+|---|---|
+| 0 | the coverage memory as above, each cell the fraction of it looked at (1 outside the world) |
+| 1 | every seen landmark's *estimate* in the cell holding it, valued by its certainty 1 / (1 + sqrt(tr Sigma_jj) / cell size) (1/2 when the expected position error is one cell; the largest where several share a cell); 0 elsewhere |
+| 2 | walls as the wall scan has seen them: a wall memory laid out like the coverage memory, where every control step marks the cells of the scan's endpoints that hit a wall before `scan_max_range`, placed from the pose *estimate*; each image cell 1 if any memory cell under it holds a wall (and outside the world), else 0 |
 
 Computed by its own compiled kernel only when enabled; with it off nothing of it runs.
 """

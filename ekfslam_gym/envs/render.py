@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,6 +24,8 @@ from ..ellipses import ellipse_points
 __all__ = ["RENDER_MODES", "Scene", "Renderer", "ellipse_points"]
 
 RENDER_MODES = ("rgb_array", "human")
+# SDL's video drivers that draw nowhere: chosen by SDL_VIDEODRIVER, or SDL's fallback without a window system.
+HEADLESS_DRIVERS = ("dummy", "offscreen")
 ELLIPSE_POINTS = 24
 ARC_POINTS = 32  # points on the field-of-view arc
 PAD = 8  # [px] around the world
@@ -296,7 +299,21 @@ class Renderer:
     def _show(self) -> None:
         pg = self._pg
         if self._window is None:
-            pg.display.init()
+            try:
+                pg.display.init()
+            except pg.error as error:
+                raise RuntimeError(
+                    f"render_mode='human' needs a display and SDL could not open one ({error}; "
+                    f"{_display_variables()}); use render_mode='rgb_array' for frames"
+                ) from None
+            driver = pg.display.get_driver()
+            if driver in HEADLESS_DRIVERS:
+                warnings.warn(
+                    f"render_mode='human' shows nothing: SDL's video driver is {driver!r}, which has no "
+                    f"screen ({_display_variables()}); render() returns None, as human mode does. Use "
+                    "render_mode='rgb_array' for frames",
+                    stacklevel=4,
+                )
             pg.display.set_caption("ekfslam-gym")
             self._window = pg.display.set_mode((self.width, self.height))
             self._clock = pg.time.Clock()
@@ -311,3 +328,12 @@ class Renderer:
             self._pg.display.quit()
             self._window = None
             self._clock = None
+
+
+def _display_variables() -> str:
+    """What the environment says about a display, for the messages above."""
+    names = ("SDL_VIDEODRIVER", "DISPLAY", "WAYLAND_DISPLAY")
+    set_ = [f"{name}={os.environ[name]!r}" for name in names if os.environ.get(name)]
+    unset = [name for name in names[1:] if not os.environ.get(name)]
+    parts = set_ + ([f"{' and '.join(unset)} unset"] if unset else [])
+    return ", ".join(parts)

@@ -1,85 +1,123 @@
-"""The reward terms by name: the one list that makes ``RewardConfig``'s fields and picks the env's reward hooks.
+"""The reward terms: pure functions of a control step's ``StepContext`` that return unweighted values.
 
-The reward of a step is the sum of the terms whose weight is non-zero; ``info["reward_terms"]`` names each.
-Every term is computed by the env's hook ``_reward_<name>(weight)`` (see ``EKFSLAMEnv._rewards``), so a new
-term is one entry here and one method there. The information-theoretic terms are the optimality criteria of
-experimental design applied to the SLAM covariance (D-, A- and E-optimality; see the README's *The maths,
-briefly*, and the Freiburg *Robot Mapping* course by C. Stachniss on active SLAM).
+``REWARD_TERMS`` is the one list of them: it makes ``RewardConfig``'s fields (the weights), the table in
+``docs/environment.md`` and ``info["reward_terms"]``, which holds every term unweighted, whatever its weight, so
+recorded steps can be re-weighted later. The reward is the weighted sum, taken in one place (``weigh``), over
+the terms whose weight is non-zero. A new term is one function and one entry here.
+
+The information gain is the D-optimality criterion of experimental design applied to the SLAM covariance (see
+the README's *The maths, briefly*, and Carrillo, Reid & Castellanos, "On the comparison of uncertainty criteria
+for active SLAM", ICRA 2012). It telescopes: it is the difference of one quantity from one control step to the
+next, which ``Telescoped`` holds.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+
+class Telescoped(NamedTuple):
+    """The quantities the telescoping terms difference, as of one control step (or reset): log det Sigma of the
+    filter's full covariance. Set at reset whatever the weights, so every term is reported from the first step
+    on."""
+
+    log_det: float
+
+
+class StepContext(NamedTuple):
+    """What one control step's reward terms read; nothing in it changes while they compute."""
+
+    before: Telescoped  # at the previous control step (or reset)
+    after: Telescoped  # after this control step's prediction and correction
+    pose_cov: np.ndarray  # (3, 3) the pose block of Sigma after the step (m^2, rad^2)
+    collided: bool  # the robot touched a wall during the step
+    covered: float  # m^2 of the world the sensor looked at for the first time in this step
+
+
+def info_gain(c: StepContext) -> float:
+    return c.before.log_det - c.after.log_det
+
+
+def collision(c: StepContext) -> float:
+    return -1.0 if c.collided else -0.0
+
+
+def step_cost(c: StepContext) -> float:
+    return -1.0
+
+
+def coverage(c: StepContext) -> float:
+    return c.covered
+
+
+def pose_variance(c: StepContext) -> float:
+    return -float(c.pose_cov[0, 0] + c.pose_cov[1, 1])
 
 
 @dataclass(frozen=True)
 class RewardTerm:
     """One reward term: its name (the ``reward`` config field and the ``reward_terms`` key), its default
-    weight and what the weight multiplies."""
+    weight, what the weight multiplies and why a user would weigh it, and its function."""
 
     name: str
     default: float
     meaning: str
+    value: Callable[[StepContext], float]
 
 
 REWARD_TERMS: tuple[RewardTerm, ...] = (
     RewardTerm(
         "info_gain",
         1.0,
-        "weight of log det Sigma_{t-1} - log det Sigma_t (the D-optimal information gain, the default)",
+        "log det Sigma_{t-1} - log det Sigma_t, nats: the D-optimal information gain, the default reward; "
+        "telescopes to log det Sigma_0 - log det Sigma_T",
+        info_gain,
     ),
-    RewardTerm("a_opt", 0.0, "weight of the drop of ln trace Sigma (A-optimality)"),
-    RewardTerm("e_opt", 0.0, "weight of the drop of ln lambda_max(Sigma) (E-optimality)"),
-    RewardTerm("collision", 1.0, "penalty per step in contact with a wall"),
-    RewardTerm("control_effort", 0.0, "penalty times |action|^2"),
+    RewardTerm("collision", 1.0, "-1 per control step in contact with a wall", collision),
     RewardTerm(
-        "step_cost", 0.0, "a constant cost per step (discourages idling once nothing is left to learn)"
-    ),
-    RewardTerm(
-        "map_variance",
+        "step_cost",
         0.0,
-        "weight per m^2 drop of the summed position variances tr Sigma_jj of the landmarks already seen "
-        "(info['belief_gain']): pays for making the mapped part more accurate (revisits, loop closures), which "
-        "a consistent filter's landmark RMSE follows, and nothing for a discovery; 0 by default",
-    ),
-    RewardTerm(
-        "pose_variance",
-        0.0,
-        "penalty per m^2 of the pose estimate's position variance tr Sigma_xy (x and y), per control step: "
-        "a cost on being lost, which an absolute map inherits (landmarks first seen from an uncertain pose are "
-        "placed as uncertainly), so it pays for staying localised and for closing loops; 0 by default",
-    ),
-    RewardTerm(
-        "pose_error",
-        0.0,
-        "penalty per m^2 of the pose estimate's squared position error |(x, y) estimate - true|^2, per control "
-        "step: pose_variance's counterpart in the truth, which also charges the over-confident pose (small "
-        "variance, large error) that pose_variance cannot see; it reads the true pose, so it is for training "
-        "only (the observation stays the belief, as in asymmetric actor-critic); 0 by default",
-    ),
-    RewardTerm(
-        "map_accuracy",
-        0.0,
-        "weight per drop of ln R, R = sqrt(mean_j tr Sigma_jj) over the landmarks seen (the landmark RMSE a "
-        "consistent filter expects): telescopes to w ln(R_first / R_final), so it charges discoveries placed "
-        "less certainly than the map so far and pays loop closures; beside info_gain it weighs the map's "
-        "accuracy against its certainty; 0 by default",
-    ),
-    RewardTerm(
-        "map_error",
-        0.0,
-        "weight per m^2 drop of the seen landmarks' true mean squared position error (info['map_rmse']^2, the "
-        "landmark RMSE the evaluation scores, squared): telescopes to w (MSE_first - MSE_final), so it charges a "
-        "discovery placed worse than the map so far and pays a correction; map_accuracy's counterpart in the "
-        "truth, for training only like pose_error (it reads the true landmarks); 0 by default",
+        "-1 per control step: with done_std, an episode that makes the map certain sooner ends sooner and pays "
+        "less of it, so it trains for the time to a certain map",
+        step_cost,
     ),
     RewardTerm(
         "coverage",
         0.0,
-        "bonus per m^2 of the world the sensor looks at for the first time (the coverage memory), an "
-        "exploration shaping for training; 0 by default, so the default reward is the information gain and "
-        "the collision penalty",
+        "m^2 of the world the sensor looks at for the first time (the coverage memory): an exploration shaping "
+        "for training, which the shipped EKFSLAM-v0 policy uses",
+        coverage,
+    ),
+    RewardTerm(
+        "pose_variance",
+        0.0,
+        "-tr Sigma_xy, m^2, the pose estimate's position variance, per control step: a cost on being lost, "
+        "which pays for staying localised and closing loops (landmarks first seen from an uncertain pose are "
+        "placed as uncertainly); the shipped EKFSLAM-Large-v0 policy uses it",
+        pose_variance,
     ),
 )
 
 REWARD_NAMES: tuple[str, ...] = tuple(term.name for term in REWARD_TERMS)
+
+
+def evaluate(context: StepContext) -> dict[str, float]:
+    """Every term's unweighted value for one control step, by name, in ``REWARD_TERMS`` order."""
+    return {term.name: term.value(context) for term in REWARD_TERMS}
+
+
+def nonzero_weights(weights: object) -> tuple[tuple[str, float], ...]:
+    """(name, weight) of the terms a ``RewardConfig`` weighs, in ``REWARD_TERMS`` order."""
+    return tuple((term.name, w) for term in REWARD_TERMS if (w := float(getattr(weights, term.name))))
+
+
+def weigh(terms: Mapping[str, float], weights: tuple[tuple[str, float], ...]) -> float:
+    """The reward: the weighted sum of ``terms`` over ``weights`` (from ``nonzero_weights``), in order."""
+    reward = 0.0
+    for name, weight in weights:
+        reward += weight * terms[name]
+    return reward

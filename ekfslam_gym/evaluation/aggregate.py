@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from . import metrics
-from .episodes import METRIC_KEYS
+from .episode_metrics import METRIC_KEYS
 
 
 def aggregate(

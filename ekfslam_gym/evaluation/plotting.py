@@ -35,6 +35,7 @@ __all__ = [
     "Frame",
     "belief_figure",
     "draw_frame",
+    "draw_graph_solution",
     "plot_graph_solution",
     "plot_limits",
     "save_gif",
@@ -247,7 +248,12 @@ def plot_graph_solution(
 
     fig = Figure(figsize=(7, 7), dpi=120)
     FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
+    draw_graph_solution(fig.add_subplot(), initial, result, title)
+    fig.savefig(path)
+
+
+def draw_graph_solution(ax: Axes, initial: Values, result: OptimizationResult, title: str = "") -> None:
+    """Draw the initial guess and the optimised poses and landmarks on a matplotlib axes."""
     ax.plot(initial.poses[:, 0], initial.poses[:, 1], color="0.7", lw=0.8, label="initial poses")
     poses, landmarks = result.values.poses, result.values.landmarks
     ax.plot(poses[:, 0], poses[:, 1], color="tab:blue", lw=0.9, label="optimised poses")
@@ -262,4 +268,3 @@ def plot_graph_solution(
         f"{title}  F: {result.initial_error:.6g} → {result.final_error:.6g} ({result.iterations} it.)"
     )
     ax.legend(loc="best", fontsize="small")
-    fig.savefig(path)

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data.course import CourseData, LandmarkMap
-from ..filter import EKFSLAM
+from ..filter import COURSE_MEASUREMENT_NOISE, COURSE_MOTION_NOISE, COURSE_SETTINGS, EKFSLAM
 from .plotting import Belief, Frame
 
 
@@ -105,12 +105,13 @@ def replay(
     *,
     world: LandmarkMap | None = None,
     steps: int | None = None,
-    update: str = "batch",
-    init_mode: str = "course",
+    update: str = COURSE_SETTINGS.update,
+    init_mode: str = COURSE_SETTINGS.init_mode,
     true_poses: np.ndarray | None = None,
     frame_every: int = 0,
 ) -> ReplayResult:
-    """Run the course's EKF-SLAM over the first ``steps`` steps of ``data`` (all by default).
+    """Run the course's EKF-SLAM (``COURSE_SETTINGS``, with the course's noise) over the first ``steps`` steps
+    of ``data`` (all by default).
 
     Each step is one prediction with its odometry, then one correction with its readings. ``frame_every`` > 0
     keeps a picture frame every that many steps (and at the last one) for an animation.
@@ -124,13 +125,11 @@ def replay(
 
     ekf = EKFSLAM(
         len(labels),
-        motion_model="odometry",
-        motion_noise=np.diag([0.1, 0.1, 0.01]),
-        measurement_noise=0.01 * np.eye(2),
-        landmark_prior=1000.0,
-        pose_prior=0.0,
+        COURSE_SETTINGS,
         init_mode=init_mode,
         update=update,
+        motion_noise=COURSE_MOTION_NOISE,
+        measurement_noise=COURSE_MEASUREMENT_NOISE,
         initial_pose=np.zeros(3),
     )
     frames: list[Frame] = []

@@ -1,8 +1,10 @@
 """Reports of an evaluation: JSON-safe values, plain-text and markdown tables, and box plots.
 
-``--json`` output of the evaluate command: one agent gives ``{"agent": str, "episodes": int, "metrics": {name:
+``--format json`` (``--json``) output of the evaluate command: one agent gives ``{"agent": str, "episodes": int, "metrics": {name:
 {"iqm": x, "ci": [lo, hi], "mean": x}}}``; several agents (a comparison) an object keyed by agent name whose
-values are such objects, in the order the agents were given. NaN is written as ``null``.
+values are such objects, in the order the agents were given. NaN is written as ``null``. ``--format blocks`` (the
+default) prints ``text_summary`` per agent, ``--format table`` one ``markdown_table``; both take what
+``aggregate.summary(name, episodes)`` returns (``aggregate`` alone lacks the name and the episode count).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from . import metrics
-from .episodes import METRIC_KEYS, NEES_STEP_BOUNDS, POSE_DIM
+from .episode_metrics import METRIC_KEYS, NEES_STEP_BOUNDS, POSE_DIM
 
 # Which way is better, for the table's arrows (None: neither, e.g. ANEES should be near 3, path length is context).
 BETTER: dict[str, str | None] = {
@@ -71,16 +73,45 @@ def format_value(value: float) -> str:
     return f"{value:.3g}"
 
 
-def markdown_table(summaries: Mapping[str, Mapping[str, Any]], keys: Sequence[str] = METRIC_KEYS) -> str:
-    """Agents as rows, metrics as columns, cells ``IQM [lo, hi]``; a note on seeds and NEES bounds below."""
-    header = ["agent", "episodes"] + [
-        f"{k} {'↑' if BETTER[k] == 'higher' else '↓' if BETTER[k] == 'lower' else ''}".strip() for k in keys
-    ]
+def _as_summaries(value: Mapping[str, Any]) -> Mapping[str, Mapping[str, Any]]:
+    """``{name: summary}`` as it is, one ``summary(...)`` as a table of one row; ``aggregate(...)``'s metrics alone
+    (no name, no episode count) refused with the call that works."""
+    if "metrics" in value and "agent" in value:  # one summary(name, episodes)
+        return {str(value["agent"]): value}
+    if value and all(isinstance(v, Mapping) and "iqm" in v for v in value.values()):
+        raise TypeError(
+            "expected summaries {name: summary(name, episodes)} or one summary(name, episodes), got aggregate()'s "
+            "metrics, which lack the name and the episode count: pass summary(name, episodes) instead"
+        )
+    for name, s in value.items():
+        if not (isinstance(s, Mapping) and "metrics" in s and "episodes" in s):
+            raise TypeError(f"{name!r} is not a summary(name, episodes) {{'agent', 'episodes', 'metrics'}}")
+    return value
+
+
+def _metric(summary: Mapping[str, Any], name: str, key: str) -> Mapping[str, Any]:
+    try:
+        return summary["metrics"][key]
+    except KeyError:
+        raise KeyError(f"{name!r} has no metric {key!r}; it has {sorted(summary['metrics'])}") from None
+
+
+def markdown_table(summaries: Mapping[str, Mapping[str, Any]], keys: Sequence[str] | None = None) -> str:
+    """Agents as rows, metrics as columns, cells ``IQM [lo, hi]``; a note on seeds and NEES bounds below.
+
+    ``summaries`` is ``{name: summary(name, episodes)}`` (``ekfslam_gym.evaluation.aggregate.summary``), or one
+    summary for a table of one row. ``keys`` are the columns, by default the first summary's metrics (``METRIC_KEYS``
+    for the evaluate command's summaries)."""
+    summaries = _as_summaries(summaries)
+    if keys is None:
+        keys = list(next(iter(summaries.values()))["metrics"]) if summaries else list(METRIC_KEYS)
+    arrows = {"higher": "↑", "lower": "↓"}
+    header = ["agent", "episodes"] + [f"{k} {arrows.get(BETTER.get(k) or '', '')}".strip() for k in keys]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for name, s in summaries.items():
         cells = [name, str(s["episodes"])]
         for k in keys:
-            m = s["metrics"][k]
+            m = _metric(s, name, k)
             cells.append(f"{format_value(m['iqm'])} [{format_value(m['ci'][0])}, {format_value(m['ci'][1])}]")
         lines.append("| " + " | ".join(cells) + " |")
     n = max((s["episodes"] for s in summaries.values()), default=1)
@@ -96,7 +127,11 @@ def markdown_table(summaries: Mapping[str, Mapping[str, Any]], keys: Sequence[st
 
 
 def text_summary(s: Mapping[str, Any]) -> str:
-    """A plain-text block for one agent (what the CLI prints without --json)."""
+    """A plain-text block for one agent, ``s = summary(name, episodes)`` (what the CLI prints by default)."""
+    summaries = _as_summaries(s)
+    if len(summaries) != 1:
+        raise TypeError(f"expected one summary(name, episodes), got {len(summaries)}: {list(summaries)}")
+    (s,) = summaries.values()
     lines = [
         f"{s['agent']}: {s['episodes']} episodes",
         f"  {'metric':<18}{'IQM':>10}  {'95% CI':<22}{'mean':>10}",

@@ -1,22 +1,55 @@
 """Judge the online filter by the full-SLAM optimum of the same episode.
 
 An env's ``info`` carries, every step, the odometry with its covariance and the readings (and at reset the
-first readings), which is all a graph needs: ``episodes.EpisodeRecorder`` collects them and
+first readings), which is all a graph needs: ``EpisodeRecorder`` collects them and
 ``compare_with_smoother`` smooths the episode with ``graph.smoother`` and reports the filter's and the
 smoother's ATE and landmark RMSE.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ..graph.smoother import smooth_drive
 from .metrics import ate, landmark_errors
 
-if TYPE_CHECKING:
-    from .episodes import EpisodeRecorder
+SMOOTHED_MOTION_MODELS: tuple[str, ...] = ("odometry", "wheels")
+"""The env's ``filter.motion_model`` values whose odometry the smoother reads."""
+
+SMOOTHER_KEYS: tuple[str, ...] = ("smoother_ate", "smoother_landmark_rmse")
+"""With ``smoother``: the same episode smoothed by the graph back end (full SLAM), the filter's judge."""
+
+
+@dataclass
+class EpisodeRecorder:
+    """Collects one episode from ``reset`` and ``step`` infos: the smoother's edges, so the motion model must be
+    one the smoother reads (``SMOOTHED_MOTION_MODELS``: turn-drive-turn or wheel odometry, not velocity)."""
+
+    true_poses: list = field(default_factory=list)
+    filter_poses: list = field(default_factory=list)
+    odometry: list = field(default_factory=list)
+    odometry_cov: list = field(default_factory=list)
+    readings: list = field(default_factory=list)
+
+    def add(self, info: dict[str, Any], *, first: bool = False) -> None:
+        """Add the info of ``reset`` (``first=True``: no odometry yet) or of a ``step``."""
+        if not first:
+            if len(info["odometry"]) != 3:  # velocity odometry is (v, omega)
+                raise ValueError(
+                    f"the smoother reads {' or '.join(SMOOTHED_MOTION_MODELS)} odometry, not velocity "
+                    "(filter.motion_model)"
+                )
+            self.odometry.append(np.asarray(info["odometry"], dtype=float))
+            self.odometry_cov.append(np.asarray(info["odometry_cov"], dtype=float))
+        self.true_poses.append(np.asarray(info["true_pose"], dtype=float))
+        self.filter_poses.append(np.asarray(info["pose"], dtype=float))
+        ids, z = info["readings"]
+        self.readings.append(
+            np.column_stack([np.asarray(ids, dtype=float), np.asarray(z, dtype=float)]).reshape(-1, 3)
+        )
 
 
 def compare_with_smoother(recorder: EpisodeRecorder, env, method: str = "gn") -> dict[str, float]:
@@ -25,9 +58,9 @@ def compare_with_smoother(recorder: EpisodeRecorder, env, method: str = "gn") ->
     ran in, still at its last step."""
     env = env.unwrapped
     config = env.config
-    if config.filter.motion_model not in ("odometry", "wheels"):
+    if config.filter.motion_model not in SMOOTHED_MOTION_MODELS:
         raise ValueError(
-            f"the smoother reads odometry or wheels odometry, not {config.filter.motion_model!r}"
+            f"the smoother reads {' or '.join(SMOOTHED_MOTION_MODELS)} odometry, not {config.filter.motion_model!r}"
         )
     true_poses = np.array(recorder.true_poses)
     smoothed = smooth_drive(

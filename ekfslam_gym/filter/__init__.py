@@ -4,12 +4,15 @@ Knows nothing of the simulator or the env; ``ekfslam_gym.graph`` is the offline 
 """
 
 from .ekf import COURSE_MEASUREMENT_NOISE, COURSE_MOTION_NOISE, EKFSLAM, FilterDivergedError, Jacobians
+from .settings import COURSE_SETTINGS, FilterSettings
 
 __all__ = [
     "COURSE_MEASUREMENT_NOISE",
     "COURSE_MOTION_NOISE",
+    "COURSE_SETTINGS",
     "EKFSLAM",
     "FilterDivergedError",
+    "FilterSettings",
     "Jacobians",
     "inverse_range_bearing",
     "odometry_motion",

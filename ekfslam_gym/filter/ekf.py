@@ -9,8 +9,9 @@ every ``resync_every`` filter calls to bound rounding drift).
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
-from typing import Literal, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -18,17 +19,13 @@ from .. import compiled
 from ..angles import wrap_angle
 from . import association, codes
 from .association import UnknownCorrection
+from .settings import FilterSettings
 
 _FLOAT64 = np.dtype(np.float64)
 _INT64 = np.dtype(np.int64)
 
 COURSE_MOTION_NOISE = np.diag([0.1, 0.1, 0.01])
 COURSE_MEASUREMENT_NOISE = 0.01 * np.eye(2)
-
-MotionModel = Literal["odometry", "velocity", "wheels"]
-InitMode = Literal["course", "inverse"]
-UpdateMode = Literal["batch", "sequential"]
-Variant = Literal["ekf", "fej", "iekf"]
 
 _MODEL_CODES = {
     "odometry": codes.MODEL_ODOMETRY,
@@ -54,6 +51,21 @@ class Jacobians(NamedTuple):
 
 class FilterDivergedError(RuntimeError):
     """The filter's covariance lost positive definiteness (an innovation covariance or Sigma itself)."""
+
+
+def _settings(settings: FilterSettings | None, changes: dict[str, Any]) -> FilterSettings:
+    """``settings`` (default ``FilterSettings()``) with ``changes`` to its fields, validated."""
+    if settings is None:
+        settings = FilterSettings()
+    elif not isinstance(settings, FilterSettings):
+        raise TypeError(f"settings must be a FilterSettings, got {type(settings).__name__}")
+    if not changes:
+        return settings
+    known = [f.name for f in dataclasses.fields(FilterSettings)]
+    unknown = sorted(set(changes) - set(known))
+    if unknown:
+        raise TypeError(f"unknown filter setting(s) {unknown}; known: {known}")
+    return dataclasses.replace(settings, **changes)
 
 
 def _as_covariance(value, size: int, name: str) -> np.ndarray:
@@ -83,99 +95,84 @@ def _check_positive_definite(arr: np.ndarray, name: str) -> None:
 class EKFSLAM:
     """EKF-SLAM for ``n_landmarks`` point landmarks observed by a range-bearing sensor.
 
+    ``EKFSLAM(n)`` filters as the env does (``FilterSettings()``: the wheels model, inverse initialisation);
+    ``EKFSLAM(n, COURSE_SETTINGS)`` as the course does; ``EKFSLAM(n, variant="fej")`` changes one setting
+    of the defaults, ``EKFSLAM(n, settings, variant="fej")`` one of ``settings``.
+
     Args:
         n_landmarks: number of landmark slots (fixed; readings name them by 0-based index).
-        motion_model: ``"odometry"`` (control (rot1, trans, rot2), Thrun et al. table 5.6), ``"velocity"``
-            (control (v, omega) applied for ``dt`` seconds, Thrun et al. table 5.3) or ``"wheels"`` (control (left, right, slip): wheel
-            travels and a sideways slip in metres, ``models.wheel_motion``).
+        settings: how it filters (``ekfslam_gym.filter.settings.FilterSettings``, whose docstring explains
+            each field; default ``FilterSettings()``). Its ``association``, ``gate_prob``, ``new_gate_prob``
+            and ``confirm_steps`` are for the caller to pass to ``correct_unknown``, as the env does.
         dt: control period in seconds for the velocity model.
         wheel_base: metres between the wheels, for the wheels model (the odometer's, e.g.
             ``WheelOdometryNoise.wheel_base``).
-        variant: where the Jacobians are taken. ``"ekf"``: at the current estimate. ``"fej"``: first-estimates
-            Jacobians (Huang, Mourikis & Roumeliotis, "Observability-based rules for designing consistent EKF
-            SLAM estimators", IJRR 2010): the measurement Jacobians at the pose's prediction and each
-            landmark's first estimate, the motion Jacobian from the previous prediction, so the linearised
-            system keeps the three unobservable directions of planar SLAM (global x, y, rotation) instead of
-            gaining spurious information about the rotation. ``"iekf"``: the correction relinearised by
-            Gauss-Newton up to ``iterations`` times (Bell & Cathey 1993), the covariance updated once at the
-            end. All keep the exact running log det and the O(m N^2) correction.
-        iterations: linearisations per correction for ``"iekf"`` (1 is the plain EKF).
         motion_noise: R, the pose-space noise added at every prediction (3x3, a (3,) diagonal or a scalar);
             default the course's diag(0.1, 0.1, 0.01). ``predict`` can override it per step, in pose space or
             in control space (R = V M V^T).
         measurement_noise: Q, the covariance of one (range, bearing) reading; default the course's 0.01 I.
-        landmark_prior: prior variance (m^2) of every unseen landmark coordinate. Bounded on purpose: an
-            infinite prior makes log det Sigma meaningless.
-        pose_prior: initial pose covariance (scalar, (3,) diagonal or 3x3); the course's is 0, which leaves
-            Sigma singular (log det = -inf) until the first prediction.
-        init_mode: ``"course"`` (the first reading sets the landmark's mean, its prior covariance stays, and the
-            reading is then used in the update) or ``"inverse"`` (mean and covariance blocks from the inverse
-            sensor model and its Jacobians, replacing the prior block; that reading is not used again).
-        update: ``"batch"`` (all readings of a step in one update, as the course does) or ``"sequential"`` (one
-            reading at a time, relinearising in between).
         initial_pose: the pose mean at time 0 (default the origin).
+        initial_pose_cov: the pose covariance at time 0 (scalar, (3,) diagonal or 3x3) where it is not
+            ``settings.pose_prior`` times the identity (e.g. a heading less certain than the position).
         min_range: metres; below it the range-bearing Jacobian uses this range instead of dividing by ~0, and a
             reading this close never initialises a landmark in inverse mode.
-        resync_every: recompute log det Sigma and P from a Cholesky after this many filter calls (0: never).
+        **changes: fields of ``FilterSettings`` to change from ``settings``.
+
+    Controls: (rot1, trans, rot2) for the ``odometry`` model (Thrun et al. table 5.6), (v, omega) applied
+    for ``dt`` seconds for ``velocity`` (table 5.3), (left, right, slip) wheel travels and a sideways slip in
+    metres for ``wheels`` (``models.wheel_motion``). Every variant keeps the exact running log det and the
+    O(m N^2) correction: ``ekf`` takes the Jacobians at the current estimate; ``fej`` (first-estimates
+    Jacobians, Huang, Mourikis & Roumeliotis, "Observability-based rules for designing consistent EKF SLAM
+    estimators", IJRR 2010) the measurement Jacobians at the pose's prediction and each landmark's first
+    estimate, the motion Jacobian from the previous prediction, so the linearised system keeps the three
+    unobservable directions of planar SLAM (global x, y, rotation) instead of gaining spurious information
+    about the rotation; ``iekf`` relinearises the correction by Gauss-Newton up to ``iterations`` times (Bell
+    & Cathey 1993), the covariance updated once at the end. A landmark prior is bounded on purpose: an
+    infinite prior makes log det Sigma meaningless.
     """
 
     def __init__(
         self,
         n_landmarks: int,
+        settings: FilterSettings | None = None,
         *,
-        motion_model: MotionModel = "odometry",
         dt: float = 0.1,
         wheel_base: float = 0.3,
-        variant: Variant = "ekf",
-        iterations: int = 5,
         motion_noise=COURSE_MOTION_NOISE,
         measurement_noise=COURSE_MEASUREMENT_NOISE,
-        landmark_prior: float = 1000.0,
-        pose_prior=0.0,
-        init_mode: InitMode = "course",
-        update: UpdateMode = "batch",
         initial_pose=None,
+        initial_pose_cov=None,
         min_range: float = 1e-3,
-        resync_every: int = 1000,
+        **changes: Any,
     ) -> None:
+        settings = _settings(settings, changes)
         if isinstance(n_landmarks, bool) or not isinstance(n_landmarks, (int, np.integer)) or n_landmarks < 0:
             raise ValueError(f"n_landmarks must be a non-negative integer, got {n_landmarks!r}")
-        if motion_model not in _MODEL_CODES:
-            raise ValueError(f"motion_model must be one of {sorted(_MODEL_CODES)}, got {motion_model!r}")
-        if variant not in _VARIANT_CODES:
-            raise ValueError(f"variant must be one of {sorted(_VARIANT_CODES)}, got {variant!r}")
-        if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 1:
-            raise ValueError(f"iterations must be an integer >= 1, got {iterations!r}")
         if not (np.isfinite(wheel_base) and wheel_base > 0):
             raise ValueError(f"wheel_base must be a positive number of metres, got {wheel_base!r}")
-        if init_mode not in ("course", "inverse"):
-            raise ValueError(f"init_mode must be 'course' or 'inverse', got {init_mode!r}")
-        if update not in ("batch", "sequential"):
-            raise ValueError(f"update must be 'batch' or 'sequential', got {update!r}")
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
-        if not (np.isfinite(landmark_prior) and landmark_prior > 0):
-            raise ValueError(f"landmark_prior must be a positive finite variance, got {landmark_prior!r}")
         if not (np.isfinite(min_range) and min_range > 0):
             raise ValueError(f"min_range must be positive, got {min_range!r}")
-        if int(resync_every) < 0:
-            raise ValueError(f"resync_every must be >= 0, got {resync_every!r}")
 
+        self.settings = settings
         self.n_landmarks = int(n_landmarks)
-        self.motion_model: MotionModel = motion_model
+        self.motion_model = settings.motion_model
         self.dt = float(dt)
         self.wheel_base = float(wheel_base)
-        self.variant: Variant = variant
-        self.iterations = int(iterations)
-        self.init_mode: InitMode = init_mode
-        self.update_mode: UpdateMode = update
+        self.variant = settings.variant
+        self.iterations = settings.iterations
+        self.init_mode = settings.init_mode
+        self.update_mode = settings.update
         self.min_range = float(min_range)
-        self.resync_every = int(resync_every)
-        self.landmark_prior = float(landmark_prior)
+        self.resync_every = settings.resync_every
+        self.landmark_prior = float(settings.landmark_prior)
         self.motion_noise = _as_covariance(motion_noise, 3, "motion_noise")
         self.measurement_noise = _as_covariance(measurement_noise, 2, "measurement_noise")
         _check_positive_definite(self.measurement_noise, "measurement_noise")
-        pose_cov0 = _as_covariance(pose_prior, 3, "pose_prior")
+        pose_cov0 = _as_covariance(
+            settings.pose_prior if initial_pose_cov is None else initial_pose_cov, 3, "initial_pose_cov"
+        )
 
         size = 3 + 2 * self.n_landmarks
         self._mean = np.zeros(size)
@@ -190,10 +187,10 @@ class EKFSLAM:
         idx = np.arange(3, size)
         self._cov[idx, idx] = self.landmark_prior
         self._observed = np.zeros(self.n_landmarks, dtype=bool)
-        self._model_code = _MODEL_CODES[motion_model]
-        self._variant_code = _VARIANT_CODES[variant]
-        self._fej = variant == "fej"
-        self._width = _CONTROL_WIDTH[motion_model]
+        self._model_code = _MODEL_CODES[self.motion_model]
+        self._variant_code = _VARIANT_CODES[self.variant]
+        self._fej = self.variant == "fej"
+        self._width = _CONTROL_WIDTH[self.motion_model]
         # First estimates: the pose as the last prediction left it, each landmark as it was initialised.
         self._prior_pose = self._mean[:3].copy()
         self._first = np.zeros((self.n_landmarks, 2))

@@ -472,6 +472,37 @@ def _initialise_inverse(mean, cov, P, slot, reading, Q, track, fej, prior_pose, 
 
 
 @njit(cache=True)
+def _put_landmark(mean, first, slot, x, y, first_x, first_y):
+    lj = 3 + 2 * slot
+    mean[lj] = x
+    mean[lj + 1] = y
+    first[slot, 0] = first_x
+    first[slot, 1] = first_y
+
+
+@njit(cache=True)
+def _course_initialise(mean, observed, first, slot, reading, saved):
+    """Course initialisation of ``slot``: its mean (and first estimate) from the reading, its prior covariance
+    kept. The values replaced go to ``saved`` (4,), for ``_undo_course_initialisation``."""
+    lj = 3 + 2 * slot
+    saved[0] = mean[lj]
+    saved[1] = mean[lj + 1]
+    saved[2] = first[slot, 0]
+    saved[3] = first[slot, 1]
+    landmark, _, _ = inverse_range_bearing(mean[:3], reading)
+    _put_landmark(mean, first, slot, landmark[0], landmark[1], landmark[0], landmark[1])
+    observed[slot] = True
+
+
+@njit(cache=True)
+def _undo_course_initialisation(mean, observed, first, slot, saved):
+    """Put back what ``_course_initialise`` replaced: the update that was to use the reading failed, and a
+    failed correction leaves the state as it found it."""
+    _put_landmark(mean, first, slot, saved[0], saved[1], saved[2], saved[3])
+    observed[slot] = False
+
+
+@njit(cache=True)
 def correct(
     mean, cov, P, observed, ids, readings, Q, min_range, course_init, sequential, track, variant, iterations,
     prior_pose, first, H_used, H_slots,
@@ -486,6 +517,8 @@ def correct(
     inverse sensor model and is not used again (further readings of it in the same step are dropped; readings
     closer than ``min_range`` never initialise). Batch: all readings in one update (inverse initialisations
     after it, from the corrected pose); sequential: one reading at a time, relinearising between them.
+    A landmark course-initialised for an update that fails (NOT_PD) is returned to what it was, so a failed
+    batch correction changes nothing (a failed sequential one keeps the readings applied before it).
     Returns (change of log det Sigma, status, number of readings used in updates).
     """
     m = ids.shape[0]
@@ -500,20 +533,18 @@ def correct(
     fej = variant == VARIANT_FEJ
     delta = 0.0
     used = 0
+    saved = np.empty((m, 4))  # what each course initialisation replaced
 
     if sequential:
         one_slot = np.empty(1, np.int64)
         one_reading = np.empty((1, 2))
         for i in range(m):
             slot = ids[i]
+            initialised = False
             if not observed[slot]:
                 if course_init:
-                    landmark, _, _ = inverse_range_bearing(mean[:3], readings[i])
-                    mean[3 + 2 * slot] = landmark[0]
-                    mean[4 + 2 * slot] = landmark[1]
-                    first[slot, 0] = landmark[0]
-                    first[slot, 1] = landmark[1]
-                    observed[slot] = True
+                    _course_initialise(mean, observed, first, slot, readings[i], saved[i])
+                    initialised = True
                 else:
                     if readings[i, 0] >= min_range:
                         delta += _initialise_inverse(
@@ -529,6 +560,8 @@ def correct(
                 prior_pose, first, H_used, H_slots, used,
             )  # fmt: skip
             if status != OK:
+                if initialised:
+                    _undo_course_initialisation(mean, observed, first, slot, saved[i])
                 return delta, status, used
             delta += d
             used += 1
@@ -536,17 +569,14 @@ def correct(
 
     use = np.zeros(m, np.bool_)
     to_initialise = np.zeros(m, np.bool_)
+    course_initialised = np.zeros(m, np.bool_)
     for i in range(m):
         slot = ids[i]
         if observed[slot]:
             use[i] = True
         elif course_init:
-            landmark, _, _ = inverse_range_bearing(mean[:3], readings[i])
-            mean[3 + 2 * slot] = landmark[0]
-            mean[4 + 2 * slot] = landmark[1]
-            first[slot, 0] = landmark[0]
-            first[slot, 1] = landmark[1]
-            observed[slot] = True
+            _course_initialise(mean, observed, first, slot, readings[i], saved[i])
+            course_initialised[i] = True
             use[i] = True
         elif readings[i, 0] >= min_range:
             first_of_slot = True
@@ -572,6 +602,9 @@ def correct(
         H_used, H_slots, 0,
     )  # fmt: skip
     if status != OK:
+        for i in range(m):
+            if course_initialised[i]:
+                _undo_course_initialisation(mean, observed, first, ids[i], saved[i])
         return 0.0, status, 0
     delta += d
     for i in range(m):

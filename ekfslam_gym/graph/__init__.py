@@ -1,10 +1,12 @@
 """Graph-based least-squares SLAM: SE(2) algebra, factors, the sparse linear system, sparse solvers, the
 Gauss-Newton / Levenberg-Marquardt optimiser, and the smoother that turns a recorded drive into a graph.
 
-``python -m ekfslam_gym.graph FILE`` optimises a ``.dat``/``.g2o`` graph (see ``ekfslam_gym.cli.graph``).
+``python -m ekfslam_gym.graph FILE`` optimises a ``.dat``/``.g2o`` graph or a GTSAM 2-D dataset (``.txt``/``.graph``)
+(see ``ekfslam_gym.cli.graph``).
 """
 
 from .optimizer import (
+    GTSAM_LM,
     FactorGraph,
     GraphProblem,
     OptimizationResult,
@@ -15,6 +17,7 @@ from .optimizer import (
 )
 
 __all__ = [
+    "GTSAM_LM",
     "FactorGraph",
     "GraphProblem",
     "OptimizationResult",

@@ -237,8 +237,28 @@ class NormalEquations:
         b = np.bincount(self._grad_index, weights=self._g_parts, minlength=self.n)
         return hdata, b, total
 
-    def retract(self, x: Array, dx: Array) -> Array:
-        """x ⊞ Δx: add, then wrap the pose headings to (−π, π] (the errors are invariant to the wrap)."""
+    def retract(self, x: Array, dx: Array, retraction: str = "add") -> Array:
+        """x ⊞ Δx, headings wrapped to (−π, π] (the errors are invariant to the wrap).
+
+        ``"add"`` adds Δx (the course's update). ``"exp"`` moves each pose along SE(2)'s exponential map, as
+        GTSAM's Pose2 retract does: X ⊕ Exp(ξ) with ξ the step in the pose's own frame, ξ = (R_θᵀΔt, Δθ). Both have
+        the same linearisation, so the Gauss-Newton step Δx is the same; they differ where the step turns a pose,
+        the exponential map carrying its position along an arc, t ← t + V(Δθ) Δt with V(ω) = [[sin ω, cos ω − 1],
+        [1 − cos ω, sin ω]] / ω (which commutes with R_θ). On long drives whose dead-reckoning start is far off
+        (Victoria Park), the arcs keep the large first steps from overshooting.
+        """
         out = x + dx
-        out[2 : 3 * self.num_poses : 3] = wrap_angles(out[2 : 3 * self.num_poses : 3])
+        headings = slice(2, 3 * self.num_poses, 3)
+        if retraction == "exp":
+            w = dx[headings]
+            small = np.abs(w) < 1e-9
+            safe = np.where(small, 1.0, w)
+            a = np.where(small, 1.0 - w * w / 6.0, np.sin(safe) / safe)  # sin ω / ω
+            b = np.where(small, w / 2.0, (1.0 - np.cos(safe)) / safe)  # (1 − cos ω) / ω
+            tx, ty = dx[0 : 3 * self.num_poses : 3], dx[1 : 3 * self.num_poses : 3]
+            out[0 : 3 * self.num_poses : 3] = x[0 : 3 * self.num_poses : 3] + a * tx - b * ty
+            out[1 : 3 * self.num_poses : 3] = x[1 : 3 * self.num_poses : 3] + b * tx + a * ty
+        elif retraction != "add":
+            raise ValueError(f"unknown retraction {retraction!r}; expected 'add' or 'exp'")
+        out[headings] = wrap_angles(out[headings])
         return out

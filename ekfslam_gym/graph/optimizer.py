@@ -36,6 +36,7 @@ from .sparse_solve import SparseSolver, make_solver
 
 __all__ = [
     "FACTOR_KINDS",
+    "GTSAM_LM",
     "FactorGraph",
     "Factors",
     "GraphProblem",
@@ -288,6 +289,7 @@ class OptimizationResult:
     method: str
     backend: str
     linear_solves: int
+    diverged: bool = False  # Gauss-Newton only: the error ended above where it started (see `gauss_newton`)
 
     @property
     def initial_error(self) -> float:
@@ -299,6 +301,20 @@ class OptimizationResult:
 
 
 IterationCallback = Callable[[int, float, Array], None]
+
+# GTSAM's LevenbergMarquardtParams defaults (GTSAM 4.2-4.3) with its Pose2 retraction, as keyword arguments of
+# `levenberg_marquardt`: λ₀ 1e-5, D = I, λ divided or multiplied by 10, a step kept when its gain ratio exceeds
+# 1e-3, stop when the error changes by less than 1e-5 of itself. On Victoria Park (docs/real-data-victoria-park.md)
+# these reach GTSAM's optimum where the course's settings (Marquardt's scaling, Nielsen's rule, x + Δx) end in
+# poorer local minima.
+GTSAM_LM: dict[str, object] = {
+    "lambda_initial": 1e-5,
+    "damping": "identity",
+    "lambda_factor": 10.0,
+    "min_gain_ratio": 1e-3,
+    "relative_tolerance": 1e-5,
+    "retraction": "exp",
+}
 
 
 def _setup(
@@ -320,12 +336,21 @@ def gauss_newton(
     step_tolerance: float = 1e-4,
     fix_first_pose: bool | None = None,
     backend: str = "auto",
+    retraction: str = "add",
     callback: IterationCallback | None = None,
 ) -> OptimizationResult:
     """Gauss-Newton with the course's rule: stop when max|Δx| < `step_tolerance` or after `max_iterations`.
 
     The gauge is fixed as in the course by adding I to the first pose's 3×3 block of H; `fix_first_pose=None`
-    does so only when the graph has no prior factor. `callback(iteration, error, x)` runs after every step.
+    does so only when the graph has no prior factor. `retraction` is ``"add"`` (the course's x + Δx) or ``"exp"``
+    (SE(2)'s exponential map, GTSAM's; see `NormalEquations.retract`). `callback(iteration, error, x)` runs
+    after every step.
+
+    Plain Gauss-Newton takes every step, so far from the optimum the error can rise for a while (on Victoria
+    Park from its dead-reckoning start it goes from 1.1e8 up to 8.2e8 before it converges, where GTSAM's
+    Gauss-Newton stops at its first rise). When the iterations run out without converging and the error ends
+    above where it started, the result says ``diverged=True`` and its `errors` show how far;
+    Levenberg-Marquardt is the remedy.
     """
     start = time.perf_counter()
     system, solver, x, gauge = _setup(graph, initial, fix_first_pose, backend)
@@ -342,7 +367,7 @@ def gauss_newton(
             raise FloatingPointError(
                 "Gauss-Newton step is not finite: H is singular (an unconstrained variable?)"
             )
-        x = system.retract(x, dx)
+        x = system.retract(x, dx, retraction)
         if callback is not None:
             callback(iterations, system.error(x), x)
         if np.max(np.abs(dx), initial=0.0) < step_tolerance:
@@ -358,6 +383,7 @@ def gauss_newton(
         "gn",
         solver.name,
         iterations,
+        diverged=not converged and errors[-1] > errors[0],
     )
 
 
@@ -372,26 +398,36 @@ def levenberg_marquardt(
     lambda_max: float = 1e10,
     fix_first_pose: bool | None = None,
     backend: str = "auto",
+    damping: str = "marquardt",
+    lambda_factor: float | None = None,
+    min_gain_ratio: float = 0.0,
+    retraction: str = "add",
     callback: IterationCallback | None = None,
 ) -> OptimizationResult:
-    """Levenberg-Marquardt with Marquardt's scaling (H + λ diag H) and Nielsen's update of λ.
+    """Levenberg-Marquardt: solve (H + λD)Δx = −b, keep the step if it lowers the error enough, adapt λ.
 
-    A step is kept only if it lowers the error; then λ shrinks by up to 3× according to the gain ratio ρ =
-    actual / predicted decrease, otherwise λ grows by 2, 4, 8… and the step is re-solved from the same
-    linearisation (same pattern: only a numeric refactorisation). Stops when an accepted step has max|Δx| <
-    `step_tolerance`, when it lowered the error by less than `relative_tolerance`·F, when λ exceeds `lambda_max`
-    (no descent left), or after `max_iterations` accepted steps. Gauge as in `gauss_newton`.
+    `damping` picks D: ``"marquardt"`` is Marquardt's scaling D = diag H, ``"identity"`` is D = I (GTSAM's
+    default). A step is kept when its gain ratio ρ = actual / predicted decrease exceeds `min_gain_ratio` (0: any
+    decrease; GTSAM's minModelFidelity is 1e-3). Then λ shrinks, by up to 3× according to ρ (Nielsen's rule) or,
+    with a `lambda_factor`, by that factor (GTSAM's fixed factor 10); otherwise λ grows (2, 4, 8…, or by the
+    factor) and the step is re-solved from the same linearisation (same pattern: only a numeric
+    refactorisation). Stops when an accepted step has max|Δx| < `step_tolerance`, when a step, kept or not,
+    changed the error by at most `relative_tolerance`·F, when λ exceeds `lambda_max` (no descent left), or after
+    `max_iterations` accepted steps. Gauge and `retraction` as in `gauss_newton`; `GTSAM_LM` holds GTSAM's
+    settings.
     """
+    if damping not in ("marquardt", "identity"):
+        raise ValueError(f"unknown damping {damping!r}; expected 'marquardt' or 'identity'")
     start = time.perf_counter()
     system, solver, x, gauge = _setup(graph, initial, fix_first_pose, backend)
-    lam, nu = lambda_initial, 2.0
+    lam, nu = lambda_initial, lambda_factor or 2.0
     hdata, b, err = system.linearize(x)
     hdata[gauge] += 1.0
     errors = [err]
     converged = False
     iterations = solves = 0
     while iterations < max_iterations:
-        scale = np.maximum(hdata[system.diagonal], 1e-12)
+        scale = np.maximum(hdata[system.diagonal], 1e-12) if damping == "marquardt" else np.ones(system.n)
         damped = hdata.copy()
         damped[system.diagonal] += lam * scale
         solver.factorize(damped)
@@ -399,14 +435,17 @@ def levenberg_marquardt(
         solves += 1
         if not np.all(np.isfinite(dx)):
             raise FloatingPointError("Levenberg-Marquardt step is not finite")
-        x_new = system.retract(x, dx)
+        x_new = system.retract(x, dx, retraction)
         err_new = system.error(x_new)
         # From (H + λD)Δx = −b: F(x) − L(Δx) = −2bᵀΔx − ΔxᵀHΔx = −bᵀΔx + λ ΔxᵀDΔx.
         predicted = float(-b @ dx + lam * (dx * dx) @ scale)
-        if err_new < err:
-            rho = (err - err_new) / predicted if predicted > 0 else 1.0
-            lam *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
-            nu = 2.0
+        rho = (err - err_new) / predicted if predicted > 0 else 1.0
+        if err_new < err and rho > min_gain_ratio:
+            if lambda_factor is None:
+                lam *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+                nu = 2.0
+            else:
+                lam /= lambda_factor
             iterations += 1
             decrease = err - err_new
             x, err = x_new, err_new
@@ -419,11 +458,13 @@ def levenberg_marquardt(
             hdata, b, _ = system.linearize(x)
             hdata[gauge] += 1.0
         else:
-            if np.max(np.abs(dx), initial=0.0) < step_tolerance:
+            small = relative_tolerance > 0 and abs(err_new - err) <= relative_tolerance * err
+            if np.max(np.abs(dx), initial=0.0) < step_tolerance or small:
                 converged = True  # no descent left at the resolution we care about
                 break
             lam *= nu
-            nu *= 2.0
+            if lambda_factor is None:
+                nu *= 2.0
             if lam > lambda_max:
                 break
     return OptimizationResult(

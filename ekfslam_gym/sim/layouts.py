@@ -351,7 +351,44 @@ def loop(
     return Layout("loop", walls, landmarks, start, bounds, wall_radius)
 
 
-LAYOUTS: dict[str, Callable[..., Layout]] = {"arena": arena, "rooms": rooms, "loop": loop}
+def surveyed(
+    rng: np.random.Generator,
+    n_landmarks: int = 0,
+    *,
+    landmarks: list | np.ndarray = (),
+    width: float = 20.0,
+    height: float = 20.0,
+    start_clearance: float = 1.0,
+    robot_radius: float = 0.2,
+    wall_radius: float = 0.05,
+) -> Layout:
+    """An open rectangle whose landmarks are given, as a survey of a real site gives them: ``landmarks`` (n, 2)
+    m inside the ``width`` x ``height`` rectangle, at least ``robot_radius + wall_radius`` from its walls;
+    ``n_landmarks`` must equal n. Only the start pose is drawn (uniform, ``start_clearance`` from the walls)."""
+    _check_size(width, height, 2.0 * start_clearance + 0.1)
+    points = np.array(landmarks, dtype=np.float64).reshape(-1, 2)
+    if len(points) != n_landmarks:
+        raise ValueError(
+            f"surveyed layout: n_landmarks is {n_landmarks} but {len(points)} landmarks are given"
+        )
+    walls = np.array(_box(0.0, 0.0, width, height))
+    clearance = robot_radius + wall_radius
+    if not np.all((points >= clearance) & (points <= np.array([width, height]) - clearance)):
+        raise ValueError(
+            f"surveyed layout: every landmark must lie inside the {width} x {height} m rectangle, at least "
+            f"{clearance} m from its walls"
+        )
+    bounds = np.array([0.0, 0.0, width, height])
+    start = _start_pose(rng, walls, bounds[:2], bounds[2:], start_clearance)
+    return Layout("surveyed", walls, points, start, bounds, wall_radius)
+
+
+LAYOUTS: dict[str, Callable[..., Layout]] = {
+    "arena": arena,
+    "rooms": rooms,
+    "loop": loop,
+    "surveyed": surveyed,
+}
 
 
 def make_layout(name: str, rng: np.random.Generator, n_landmarks: int = 30, **kwargs: object) -> Layout:
