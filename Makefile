@@ -5,13 +5,14 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 PIP := $(BIN)/python -m pip --disable-pip-version-check
-EXTRAS ?= render,train,graph,zoo,cluster,dev
+EXTRAS ?= render,train,graph,zoo,cluster,dev,docs
 comma := ,
 STAMP := $(VENV)/.installed-$(subst $(comma),-,$(EXTRAS))
 export OPENBLAS_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
+export NO_MKDOCS_2_WARNING := 1
 
-.PHONY: install demo test test-fast test-rllib bench lint clean
+.PHONY: install demo test test-fast test-rllib bench lint docs clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -67,8 +68,13 @@ bench: install  # bench/graph.py compares with GTSAM when the bench extra is ins
 	$(BIN)/python bench/decisions.py
 	$(BIN)/python bench/actions.py
 
+# The documentation site, built offline from docs/ into site/ (strict: a broken link or a missing page fails).
+docs: install
+	$(BIN)/python docs/generate.py --check
+	$(BIN)/mkdocs build --strict --quiet
+
 lint: install
 	$(BIN)/ruff check . && $(BIN)/ruff format --check .
 
 clean:
-	rm -rf $(VENV) $(RLLIB_VENV) out .pytest_cache
+	rm -rf $(VENV) $(RLLIB_VENV) out site .pytest_cache

@@ -48,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     run = out / "ppo_short"
     train.main(["--config", str(ROOT / "configs" / "ppo.yaml"), "--timesteps", str(steps), "--out", str(run),
-                *(["--no-progress"] if args.smoke else []), *(["--hyperparams", *hyper] if hyper else [])])  # fmt: skip
+                *(["--hyperparams", *hyper] if hyper else [])])  # fmt: skip
     print(f"learning curve: {run / 'learning_curve.png'}")
 
     print("\n== 3. Baselines and PPO on held-out seeds", flush=True)
@@ -58,7 +58,8 @@ def main(argv: list[str] | None = None) -> int:
         models += ["--model", str(SHIPPED)]
     else:
         print(f"(no shipped model at {SHIPPED}: comparing the short run only)")
-    common = ["--seeds", seeds, *(["--max-episode-steps", "30", "--no-progress"] if args.smoke else [])]
+    # Progress bars are drawn only on a terminal (train.py, evaluate): a log or a pipe gets plain lines.
+    common = ["--seeds", seeds, *(["--max-episode-steps", "30"] if args.smoke else [])]
     status = evaluate.main(["--compare", "--per-model", *models, *common, "--table", str(out / "comparison.md"),
                             "--plot", str(out / "comparison.png")])  # fmt: skip
     if status != 0:

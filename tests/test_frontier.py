@@ -278,7 +278,7 @@ def _waypoint_episode(seed, env_id="EKFSLAM-v0", **kwargs):
 
 
 def test_the_waypoint_planner_gives_goals_on_its_path_and_explores():
-    """The frontier planner in the waypoint interface (the teacher of configs/ppo_frontier_bc.yaml): valid,
+    """The frontier planner in the waypoint interface (the teacher of configs/experiments/ppo_frontier_bc.yaml): valid,
     deterministic goals on its path, macro steps mostly driven in full, most landmarks seen, no contact."""
     goals, info, seen, inner = _waypoint_episode(0)
     again, _, _, _ = _waypoint_episode(0)

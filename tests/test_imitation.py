@@ -557,18 +557,18 @@ def _smoke_train(config, out, pretrain, action_kind, env_id="EKFSLAM-v0"):
 
 
 def test_the_cnn_recipe_clones_into_the_belief_cnn_at_smoke_size(tmp_path):
-    """configs/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe, less its coverage bonus, wider image and
+    """configs/experiments/ppo_belief_cnn_bc.yaml (the shipped EKFSLAM-v0 recipe, less its coverage bonus, wider image and
     frontier teacher): demonstrations of Dict observations with the belief image are cloned into the
     MultiInputPolicy's BeliefCNN, then PPO starts from the clone."""
     from ekfslam_gym.agents import PPOAgent
     from ekfslam_gym.agents.extractors import BeliefCNN
 
-    entry = settings.load_entry(Path("configs/ppo_belief_cnn_bc.yaml"), "EKFSLAM-v0")
+    entry = settings.load_entry(Path("configs/experiments/ppo_belief_cnn_bc.yaml"), "EKFSLAM-v0")
     assert (
         entry["pretrain"]["episodes"] == 1000 and entry["env_kwargs"]["observation"]["belief_image"] is True
     )
     out = tmp_path / "run"
-    _smoke_train("configs/ppo_belief_cnn_bc.yaml", out, "{episodes: 2, epochs: 2}", "primitives")
+    _smoke_train("configs/experiments/ppo_belief_cnn_bc.yaml", out, "{episodes: 2, epochs: 2}", "primitives")
     demos = demo_mod.load(out / "demonstrations.npz")
     assert demos.meta["env_kwargs"]["observation"]["belief_image"] is True
     assert json.loads((out / "pretrain.json").read_text())["pairs"] == 16
@@ -603,15 +603,18 @@ def test_the_shipped_recipe_clones_the_frontier_planners_primitives_at_smoke_siz
 
 
 def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
-    """configs/ppo_frontier_bc.yaml: the frontier planner's waypoint goals, with Dict observations and the belief
+    """configs/experiments/ppo_frontier_bc.yaml: the frontier planner's waypoint goals, with Dict observations and the belief
     image, cloned into the Gaussian MultiInputPolicy, then PPO starts from the clone."""
     from ekfslam_gym.agents import PPOAgent
 
-    entry = settings.load_entry(Path("configs/ppo_frontier_bc.yaml"), "EKFSLAM-v0")
+    entry = settings.load_entry(Path("configs/experiments/ppo_frontier_bc.yaml"), "EKFSLAM-v0")
     assert entry["pretrain"]["planner"] == "frontier" and entry["env_kwargs"]["action"]["kind"] == "waypoint"
     out = tmp_path / "run"
     _smoke_train(
-        "configs/ppo_frontier_bc.yaml", out, "{planner: frontier, episodes: 2, epochs: 2}", "waypoint"
+        "configs/experiments/ppo_frontier_bc.yaml",
+        out,
+        "{planner: frontier, episodes: 2, epochs: 2}",
+        "waypoint",
     )
     demos = demo_mod.load(out / "demonstrations.npz")
     assert demos.actions.dtype == np.float32 and demos.actions.shape == (16, 2)
@@ -622,15 +625,15 @@ def test_the_frontier_recipe_clones_waypoint_goals_at_smoke_size(tmp_path):
 
 
 def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_image_and_the_frontier_teacher():
-    """configs/ppo_belief_cnn_bc_coverage.yaml differs from configs/ppo_belief_cnn_bc.yaml only in the reward,
-    configs/ppo_belief_cnn_bc_coverage_wide.yaml from it only in the belief image's reach,
+    """configs/experiments/ppo_belief_cnn_bc_coverage.yaml differs from configs/experiments/ppo_belief_cnn_bc.yaml only in the reward,
+    configs/experiments/ppo_belief_cnn_bc_coverage_wide.yaml from it only in the belief image's reach,
     configs/ppo_frontier_primitives_bc.yaml (models/ppo_EKFSLAM-v0.zip's recipe) from that only in the teacher
     and the discount, and the shipped model's record holds that same entry (less where its demonstrations were
     read: seeds 1-4 reused seed 0's)."""
     import yaml
 
     def entry(name):
-        return settings.load_entry(Path(f"configs/{name}.yaml"), "EKFSLAM-v0")
+        return settings.load_entry(_config_path(name), "EKFSLAM-v0")
 
     base, bonus, wide, frontier = (
         entry("ppo_belief_cnn_bc"),
@@ -656,17 +659,23 @@ def test_the_shipped_recipe_is_the_cnn_recipe_with_the_coverage_bonus_a_wider_im
     assert bonus == base
 
 
-def _large_entry(name):
-    """configs/<name>.yaml's EKFSLAM-Large-v0 entry, as train.py reads it."""
+def _config_path(name):
+    """configs/<name>.yaml, a shipped recipe or an example, else configs/experiments/<name>.yaml."""
+    top = Path(f"configs/{name}.yaml")
+    return top if top.is_file() else Path(f"configs/experiments/{name}.yaml")
 
-    return settings.load_entry(Path(f"configs/{name}.yaml"), "EKFSLAM-Large-v0")
+
+def _large_entry(name):
+    """configs/<name>.yaml's (or configs/experiments/<name>.yaml's) EKFSLAM-Large-v0 entry, as train.py reads it."""
+
+    return settings.load_entry(_config_path(name), "EKFSLAM-Large-v0")
 
 
 def test_the_large_mlp_recipes_differ_only_where_named():
-    """configs/ppo_primitives_home_keep_bc.yaml (the recipe shipped before the recurrent one) differs from
-    configs/ppo_primitives_relocalize03_bc.yaml (shipped before it) only in the teacher's settings and the cloning
-    kept up during fine-tuning; that one from configs/ppo_primitives_relocalize_bc.yaml only in the teacher's
-    loop-closing threshold, and configs/ppo_belief_cnn_relocalize_bc.yaml from that only in the observation's
+    """configs/experiments/ppo_primitives_home_keep_bc.yaml (the recipe shipped before the recurrent one) differs from
+    configs/experiments/ppo_primitives_relocalize03_bc.yaml (shipped before it) only in the teacher's settings and the cloning
+    kept up during fine-tuning; that one from configs/experiments/ppo_primitives_relocalize_bc.yaml only in the teacher's
+    loop-closing threshold, and configs/experiments/ppo_belief_cnn_relocalize_bc.yaml from that only in the observation's
     reader: the belief image and the CNN extractor."""
 
     home, shipped, mlp, cnn = (
@@ -695,9 +704,9 @@ def test_the_large_mlp_recipes_differ_only_where_named():
 
 
 def test_the_recurrent_home_keep_recipe_is_the_mlp_one_with_the_lstm_and_early_stopping():
-    """configs/ppo_lstm_primitives_home_keep_bc.yaml is configs/ppo_primitives_home_keep_bc.yaml (the MLP recipe
+    """configs/experiments/ppo_lstm_primitives_home_keep_bc.yaml is configs/experiments/ppo_primitives_home_keep_bc.yaml (the MLP recipe
     shipped before the recurrent one) with the recurrent recipe's policy (the algorithm, LSTM, minibatch and
-    learning rate of configs/ppo_lstm_primitives_relocalize03_bc.yaml) and best_epoch; from that recurrent recipe
+    learning rate of configs/experiments/ppo_lstm_primitives_relocalize03_bc.yaml) and best_epoch; from that recurrent recipe
     it differs only in the teacher, the hold and best_epoch."""
 
     lstm_home, mlp_home, lstm = (
@@ -722,7 +731,7 @@ def test_the_shipped_large_model_records_the_recurrent_recipe_at_pose_variance_4
     """models/ppo_EKFSLAM-Large-v0.zip was trained from configs/ppo_lstm_primitives_home_keep_pv4_bc.yaml: its
     record holds that entry, less where its demonstrations were read (a file the same settings had collected,
     under the reward of pose_variance 8, reweighted). That config and the one at 6 shipped before it are
-    configs/ppo_lstm_primitives_home_keep_bc.yaml with the pose-variance charge at 4 and 6 instead of 8, and
+    configs/experiments/ppo_lstm_primitives_home_keep_bc.yaml with the pose-variance charge at 4 and 6 instead of 8, and
     nothing else."""
     import yaml
 
@@ -747,7 +756,7 @@ def test_the_shipped_large_model_records_the_recurrent_recipe_at_pose_variance_4
 
 
 def test_the_recurrent_belief_cnn_recipe_is_the_shipped_large_one_reading_the_image(tmp_path):
-    """configs/ppo_lstm_belief_cnn_home_keep_pv4_bc.yaml is configs/ppo_lstm_primitives_home_keep_pv4_bc.yaml
+    """configs/experiments/ppo_lstm_belief_cnn_home_keep_pv4_bc.yaml is configs/ppo_lstm_primitives_home_keep_pv4_bc.yaml
     (models/ppo_EKFSLAM-Large-v0.zip's recipe) with the Dict observation's belief image read by BeliefCNN in a
     MultiInputLstmPolicy, and nothing else; at smoke size its demonstrations are cloned into that policy with
     one DAgger round, and PPO starts from the clone."""
@@ -773,7 +782,7 @@ def test_the_recurrent_belief_cnn_recipe_is_the_shipped_large_one_reading_the_im
         "{planner: frontier, planner_kwargs: {home_weight: 0.5}, episodes: 2, epochs: 2, dagger_rounds: 1, "
         "dagger_episodes: 1, best_epoch: true}"
     )
-    config = "configs/ppo_lstm_belief_cnn_home_keep_pv4_bc.yaml"
+    config = "configs/experiments/ppo_lstm_belief_cnn_home_keep_pv4_bc.yaml"
     _smoke_train(config, out, pretrain, "primitives", "EKFSLAM-Large-v0")
     assert json.loads((out / "pretrain.json").read_text())["pairs"] == 24
     for name in ("bc_model.zip", "model.zip"):

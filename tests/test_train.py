@@ -127,8 +127,12 @@ def test_the_run_says_when_it_rounds_and_always_evaluates(tmp_path, capsys):
     assert not (tmp_path / "none" / "best_model.zip").exists()
 
 
-def test_demo_smoke_runs_every_stage(tmp_path):
+def test_demo_smoke_runs_every_stage(tmp_path, capfd):
     assert demo.main(["--smoke", "--out", str(tmp_path)]) == 0
+    printed = capfd.readouterr()
+    assert (
+        "\r" not in printed.out + printed.err
+    )  # no progress bars redrawn into a log (output is not a terminal)
     for name in ("replay.png", "comparison.md", "comparison.png"):
         assert (tmp_path / name).stat().st_size > 0
     assert any((tmp_path / "gifs").glob("*.gif"))

@@ -99,7 +99,9 @@ def _build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--plot", metavar="FILE", default=None, help="box plots of every metric")
     parser.add_argument("--table", metavar="FILE.md", default=None, help="markdown table of the aggregates")
     parser.add_argument("--episodes-json", metavar="FILE", default=None, help="write the per-episode metrics")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
+    parser.add_argument(
+        "--no-progress", action="store_true", help="no progress bars (drawn only when stderr is a terminal)"
+    )
     parser.add_argument("--smoother", action="store_true",
                         help="also smooth every episode with graph SLAM and report smoother_ate and "
                              "smoother_landmark_rmse beside the filter's ate and landmark_rmse")  # fmt: skip

@@ -142,6 +142,20 @@ def text_summary(s: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def boxes_with_iqm(ax: Any, data: Sequence[np.ndarray], size: float = 1.0) -> np.ndarray:
+    """One box per array of episodes on ``ax``, with its IQM and 95 % bootstrap CI drawn over it in red; the
+    boxes' x positions (1, 2, ...). ``size`` scales the markers."""
+    positions = np.arange(1, len(data) + 1)
+    ax.boxplot(data, positions=positions, widths=0.6, showfliers=True, flierprops={"markersize": 3 * size})
+    for p, values in zip(positions, data):
+        if values.size:
+            centre = metrics.iqm(values)
+            lo, hi = metrics.bootstrap_ci(values)
+            ax.errorbar([p], [centre], yerr=[[centre - lo], [hi - centre]], fmt="o", color="tab:red",
+                        markersize=4 * size, capsize=3 * size)  # fmt: skip
+    return positions
+
+
 def plot_results(
     episodes: Mapping[str, Sequence[Mapping[str, float]]], path: str | Path, keys: Sequence[str] = METRIC_KEYS
 ) -> Path:
@@ -160,14 +174,7 @@ def plot_results(
         for name in names:
             values = np.array([e[key] for e in episodes[name]], dtype=float)
             data.append(values[np.isfinite(values)])
-        positions = np.arange(1, len(names) + 1)
-        ax.boxplot(data, positions=positions, widths=0.6, showfliers=True, flierprops={"markersize": 3})
-        for p, values in zip(positions, data):
-            if values.size:
-                centre = metrics.iqm(values)
-                lo, hi = metrics.bootstrap_ci(values)
-                ax.errorbar([p], [centre], yerr=[[centre - lo], [hi - centre]], fmt="o", color="tab:red",
-                            markersize=4, capsize=3)  # fmt: skip
+        positions = boxes_with_iqm(ax, data)
         ax.set_xticks(positions, names, rotation=30, fontsize=8)
         ax.set_title(metric_label(key), fontsize=9)
         ax.tick_params(axis="y", labelsize=8)

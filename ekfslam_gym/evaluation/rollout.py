@@ -150,7 +150,7 @@ def evaluate_agent(
     results = []
     try:
         iterator: Iterable[int] = seeds
-        if progress:
+        if progress and getattr(sys.stderr, "isatty", lambda: False)():  # a bar only on a terminal, not a log
             from tqdm import tqdm
 
             iterator = tqdm(seeds, desc=label, unit="episode", file=sys.stderr, leave=False)

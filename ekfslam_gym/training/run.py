@@ -233,7 +233,9 @@ def train(
         print(f"note: {entry['algo']} collects whole rollouts of n_steps x n_envs = {rollout_steps(entry)} env "
               f"steps, so this run trains to {steps_trained(entry, done)} steps, not {total}", file=sys.stderr)  # fmt: skip
     if remaining > 0:
-        model.learn(total_timesteps=remaining, callback=callbacks, progress_bar=progress,
+        # A bar redraws itself with carriage returns: only on a terminal, never into a log or a pipe.
+        bar = progress and getattr(sys.stdout, "isatty", lambda: False)()
+        model.learn(total_timesteps=remaining, callback=callbacks, progress_bar=bar,
                     reset_num_timesteps=reset, tb_log_name=entry["algo"])  # fmt: skip
         evaluate_at_the_end(callbacks, entry, model.num_timesteps)
     save_with_stats(model, out / "model", out)
