@@ -194,9 +194,9 @@ def _env_fields() -> dict[str, set[str]]:
 def _pretrain_keys() -> set[str]:
     sys.path.insert(0, str(ROOT))
     try:
-        import train
+        from ekfslam_gym.training.settings import load_entry
 
-        return set(train.load_entry(ROOT / "configs" / "ppo_primitives_bc.yaml", "EKFSLAM-v0")["pretrain"])
+        return set(load_entry(ROOT / "configs" / "ppo_primitives_bc.yaml", "EKFSLAM-v0")["pretrain"])
     finally:
         sys.path.remove(str(ROOT))
 
@@ -301,9 +301,9 @@ def test_rst_tables_become_markdown_tables() -> None:
 def _load(config: Path, env_id: str) -> dict:
     sys.path.insert(0, str(ROOT))
     try:
-        import train  # the trainer's own loader, wherever the package keeps it
+        from ekfslam_gym.training.settings import resolve_entry  # the trainer's own loader
 
-        return train.resolve_entry(config, env_id)
+        return resolve_entry(config, env_id)
     finally:
         sys.path.remove(str(ROOT))
 
