@@ -40,7 +40,7 @@ demo: install
 	$(BIN)/python demo.py --out out
 
 test: install
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n auto  # pytest-xdist: one worker a core
 
 test-fast: install
 	$(BIN)/python -m pytest -m "not slow"
