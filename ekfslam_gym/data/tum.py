@@ -13,7 +13,7 @@ project's ``evaluation.metrics.ate`` to rounding, not to a print format; timesta
 
 The landmark CSV holds one row per landmark with its true and estimated position and whether the filter ever
 saw it; an unseen landmark's estimate is ``nan``: the filter has not initialised it and holds only its prior
-(README, "The maths, briefly").
+(docs/filter-and-graph.md, "The maths, briefly").
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ recorded steps can be re-weighted later. The reward is the weighted sum, taken i
 the terms whose weight is non-zero. A new term is one function and one entry here.
 
 The information gain is the D-optimality criterion of experimental design applied to the SLAM covariance (see
-the README's *The maths, briefly*, and Carrillo, Reid & Castellanos, "On the comparison of uncertainty criteria
+docs/filter-and-graph.md, *The maths, briefly*, and Carrillo, Reid & Castellanos, "On the comparison of uncertainty criteria
 for active SLAM", ICRA 2012). It telescopes: it is the difference of one quantity from one control step to the
 next, which ``Telescoped`` holds.
 """

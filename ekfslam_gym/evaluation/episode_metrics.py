@@ -16,7 +16,7 @@ not pooled):
   that make the map better. The drop of ``info["log_det"]`` (the reward's information gain) is not correlated
   with the truth gain here: its steps are ruled by discoveries (about 20 nats each, while a new landmark's error
   enters the truth gain only from the next step) and by the pose's prediction noise, so its Pearson
-  correlation is about 0 for every agent (README, "Belief beside truth") and tells none apart: not reported.
+  correlation is about 0 for every agent (docs/evaluation.md, "Belief beside truth") and tells none apart: not reported.
 - ``map_nees``: the NEES of the seen landmarks' final estimates jointly, e_m^T Sigma_mm^-1 e_m, divided by its
   2 n_seen degrees of freedom (as in ``consistency``): about 1 for a consistent filter, above 1 when the filter
   believes its map better than it is (the over-confidence a reward for believed information pays for). Chosen

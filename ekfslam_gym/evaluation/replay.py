@@ -2,7 +2,7 @@
 
 The course's settings (Freiburg *Robot Mapping*, EKF-SLAM exercise): R = diag(0.1, 0.1, 0.01) on the pose,
 Q = 0.01 I per reading, landmark prior 1000, zero pose prior at the origin, course initialisation, batch
-update. The README's "Data" section gives the known answers the tests hold it to. ``export_tum`` writes a
+update. docs/filter-and-graph.md's "Data" section gives the known answers the tests hold it to. ``export_tum`` writes a
 replay's trajectories for the evo tools (``data.tum``).
 """
 

@@ -1,11 +1,11 @@
 """Compiled EKF-SLAM kernels: prediction, correction and landmark initialisation, in place.
 
 Why compiled: one numpy call costs a few microseconds whatever its size at these dimensions, and the env calls
-the filter millions of times (README, "Speed"). Each kernel touches only what changes:
+the filter millions of times (docs/performance.md). Each kernel touches only what changes:
 prediction the three pose rows and columns (O(N)); correction the N x 2m block Sigma H^T and the rank-2m
 update of Sigma (O(m N^2)); no G, F_x, F_x,j or H of full size is ever built.
 
-The log-determinant of Sigma is kept exactly by the identities in the README's "The running log det", using P, the pose covariance
+The log-determinant of Sigma is kept exactly by the identities in docs/filter-and-graph.md's "The maths, briefly", using P, the pose covariance
 conditioned on the map (the Schur complement of the map block):
 - prediction:  P <- G P G^T + R,               d log det = log det P' - log det P
 - correction:  P^-1 <- P^-1 + sum Hx^T Q^-1 Hx,  d log det = sum log det Q - log det S

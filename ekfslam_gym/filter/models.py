@@ -100,7 +100,7 @@ def wheel_motion(pose: np.ndarray, left: float, right: float, slip: float, wheel
     a = (right - left) / b and travels d = (left + right) / 2 along an arc, whose chord d sinc(a/2) points along
     the mid-heading theta + a/2 (Thrun, Burgard & Fox, *Probabilistic Robotics*, section 5.3, in chord form).
     ``slip`` is a sideways displacement (m) along the mid-heading's normal, which wheels cannot measure (the
-    robot sliding along a wall); the odometry reports it as 0 with a variance (README, "Known limitations").
+    robot sliding along a wall); the odometry reports it as 0 with a variance (docs/filter-and-graph.md, "Known limitations of the filter").
     Smooth, value and Jacobians, through a = 0; exact for any planar motion (three numbers, three dof).
 
     Returns the new pose (3,), G = d pose'/d pose (3, 3) and V = d pose'/d (left, right, slip) (3, 3).

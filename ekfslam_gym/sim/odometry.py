@@ -94,7 +94,7 @@ class WheelOdometryNoise:
     integrated at the physics substep rate, measure the body's travel along its heading and its turn for any
     motion: forward, backward, turning in place, a command changing every step (two arcs in one step, whose
     sideways residual against one arc the reading's slip carries). What they cannot see is the body sliding
-    sideways along a wall (README "Known limitations"); the turn-drive-turn model reads that slide as +-90
+    sideways along a wall (docs/filter-and-graph.md, "Known limitations of the filter"); the turn-drive-turn model reads that slide as +-90
     degree turns and its alpha noise as large heading noise, here it is a sideways slip, position only:
 
     - ``slide_sensed`` (default): the bumper senses the slide (the wall's direction and the wheels' travel), with
