@@ -52,7 +52,7 @@ RLLIB_PIP := $(RLLIB_VENV)/bin/python -m pip --disable-pip-version-check
 $(RLLIB_VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(RLLIB_VENV)
 	$(RLLIB_PIP) install -q --progress-bar off torch==2.13.0
-	$(RLLIB_PIP) install -q --progress-bar off ".[rllib]" "pytest>=8"
+	$(RLLIB_PIP) install -q --progress-bar off -e ".[rllib]" "pytest>=8"
 	touch $@
 
 test-rllib: $(RLLIB_VENV)/.installed
