@@ -428,13 +428,18 @@ class EKFSLAM:
             and readings.flags.c_contiguous
         ):
             raise TypeError("update() takes the simulator's arrays as they are; use predict() and correct()")
-        self._control[:width] = control
-        self._reserve_jacobians(ids.shape[0])
+        if width == 3:
+            kernel_control = control  # as the kernel reads it: no copy
+        else:  # (v, omega): the kernel reads three entries
+            kernel_control = self._control
+            kernel_control[:width] = control
+        if ids.shape[0] > self._H_slots.shape[0]:
+            self._reserve_jacobians(ids.shape[0])
         if not self._tracking or (self.resync_every and self._calls_since_resync + 1 >= self.resync_every):
             # a resync falls between the two (or tracking starts): the calls one at a time, as the library's
             return self.predict(control, control_cov=control_cov) + self.correct(ids, readings)
         delta, status, change, correction_status, self._n_used = compiled.predict_correct(
-            self._arrays, self._options, self._control, control_cov, ids, readings, self.measurement_noise
+            self._arrays, self._options, kernel_control, control_cov, ids, readings, self.measurement_noise
         )
         if status == codes.BAD_INPUT:
             raise ValueError(f"control and its noise must be finite, got {control!r}")
