@@ -18,7 +18,7 @@ from ekfslam_gym.agents import (
     wall_scan,
 )
 from ekfslam_gym.agents.greedy import expected_readings, rollout_gain
-from ekfslam_gym.agents.greedy.grid import distance_field, update_walls
+from ekfslam_gym.agents.navigation import distance_field, update_walls
 from ekfslam_gym.agents.ppo import model_paths
 
 import ekfslam_gym  # noqa: F401  (registers the env ids)

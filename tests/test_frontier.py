@@ -14,15 +14,19 @@ from ekfslam_gym.agents.frontier import (
     FrontierPrimitivesPlanner,
     FrontierWaypointPlanner,
     coverage_and_bounds,
+)
+from ekfslam_gym.agents.navigation import (
+    arc_poses,
+    arc_vetoed,
     frontier_cells,
     frontier_regions,
     grid_paths,
     nearest_paths,
     path_sources,
+    scan_geometry,
+    to_world,
+    update_walls,
 )
-from ekfslam_gym.agents.greedy.grid import update_walls
-from ekfslam_gym.agents.greedy.rollout import arc_poses
-from ekfslam_gym.agents.greedy.veto import arc_vetoed, scan_geometry, to_world
 
 import ekfslam_gym  # noqa: F401  (registers the env ids)
 from ekfslam_gym.envs import EKFSLAMEnv
