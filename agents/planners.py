@@ -126,5 +126,5 @@ def make_planner(name: str, kind: str, **kwargs: Any) -> Agent:
         if cls.action_kind == kind:
             return cls(**kwargs)
     raise ValueError(
-        f"the {name} planner demonstrates in action.kind {' or '.join(PLANNERS[name])}, not {kind!r}"
+        f"the {name} planner demonstrates in action.kind {' or '.join(PLANNERS[name])}, not {str(kind)!r}"
     )
