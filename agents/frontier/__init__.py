@@ -48,8 +48,12 @@ behaviour cloning and DAgger). The grid, the wall memory, Dijkstra and the wall 
 pieces in ``ekfslam_gym.agents.navigation``.
 """
 
+from ..navigation import frontier_cells, frontier_regions, grid_paths, path_sources
 from .agent import FrontierAgent, Mode, coverage_and_bounds
 from .planners import FrontierPrimitivesPlanner, FrontierWaypointPlanner
+
+# The grid pieces above are ``ekfslam_gym.agents.navigation``'s, named here too for code written against the
+# frontier module before the split (the team env's baselines); new code imports them from navigation.
 
 __all__ = [
     "FrontierAgent",
@@ -57,4 +61,8 @@ __all__ = [
     "FrontierWaypointPlanner",
     "Mode",
     "coverage_and_bounds",
+    "frontier_cells",
+    "frontier_regions",
+    "grid_paths",
+    "path_sources",
 ]
