@@ -204,8 +204,6 @@ class _PublicEnv:
 
     def __init__(self):
         self.unwrapped = self
-        self._memory = None
-        self._bounds = None
 
     @property
     def coverage_memory(self):

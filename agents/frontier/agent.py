@@ -44,15 +44,10 @@ class Mode(str, Enum):
 
 
 def coverage_and_bounds(env: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The env's coverage memory (rows along y, 1 = looked at) and the world's bounds (xmin, ymin, xmax, ymax).
-
-    Through the env's public read-only properties where it has them; the fallback to its private attributes is
-    for envs from before those properties and can be deleted with them.
-    """
+    """The env's coverage memory (rows along y, 1 = looked at) and the world's bounds (xmin, ymin, xmax, ymax),
+    through its public read-only properties ``coverage_memory`` and ``bounds``."""
     u = env.unwrapped
-    if hasattr(type(u), "coverage_memory") and hasattr(type(u), "bounds"):
-        return np.asarray(u.coverage_memory), np.asarray(u.bounds, dtype=float)
-    return u._memory, np.asarray(u._bounds, dtype=float)
+    return np.asarray(u.coverage_memory), np.asarray(u.bounds, dtype=float)
 
 
 class FrontierAgent(Agent):
