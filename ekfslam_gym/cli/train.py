@@ -68,7 +68,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.resume is not None:
         try:
             env_id, seed, entry = read_run(args.resume)
-        except FileNotFoundError as error:
+        except (FileNotFoundError, ValueError) as error:  # no record, or not a complete one
             parser.error(str(error))
         if args.timesteps is not None:
             entry["n_timesteps"] = args.timesteps
@@ -79,8 +79,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         except FileNotFoundError as error:
             parser.error(str(error))
         env_id, seed = args.env_id, args.seed
-        entry = resolve_entry(args.config, env_id, parse_hyperparams(args.hyperparams),
-                              timesteps=args.timesteps, n_envs=args.n_envs)  # fmt: skip
+        try:
+            entry = resolve_entry(args.config, env_id, parse_hyperparams(args.hyperparams),
+                                  timesteps=args.timesteps, n_envs=args.n_envs)  # fmt: skip
+        except SettingsError as error:  # the config's entry or a --hyperparams pair
+            parser.error(str(error))
         out = args.out or Path("runs") / f"{env_id}_seed{seed}"
     try:
         train(env_id, seed, entry, out, resume=args.resume is not None, progress=not args.no_progress,

@@ -337,13 +337,22 @@ def test_readings_never_cross_a_wall():
     assert count > 50
 
 
-def test_filter_failure_terminates_without_raising():
+def test_filter_failure_terminates_without_raising(monkeypatch):
+    """The filter signals a numerical failure with ``FilterDivergedError`` (its public contract: an innovation
+    covariance or Sigma that loses positive definiteness raises it); the env ends the episode and reports it
+    instead of raising."""
+    from ekfslam_gym.filter.ekf import FilterDivergedError
+
     env = EKFSLAMEnv()
     env.reset(seed=0)
-    env.filter._cov[:] = -np.eye(env.filter.state_size)
-    env.filter._tracking = True
+
+    def diverge(*args, **kwargs):
+        raise FilterDivergedError("innovation covariance is not positive definite")
+
+    monkeypatch.setattr(env.filter, "update", diverge)
     _, reward, terminated, truncated, info = env.step(np.zeros(2))
     assert terminated and not truncated and info["filter_failed"] and reward == 0.0
+    assert all(value == 0.0 for value in info["reward_terms"].values())
 
 
 @pytest.mark.slow
