@@ -66,9 +66,7 @@ def draw(family: str, tier: str, path: Path) -> None:
 def table() -> str:
     """The page's table: a row per family, a column per tier, each cell a thumbnail and its size."""
     from ekfslam_gym.seeds import HELDOUT_FAMILIES
-    from ekfslam_gym.sim import FAMILIES, TIERS, world_section
-
-    from ekfslam_gym.sim import LAYOUTS
+    from ekfslam_gym.sim import FAMILIES, LAYOUTS, TIERS, world_section
 
     lines = ["| family | " + " | ".join(TIERS) + " |", "|---|" + "---|" * len(TIERS)]
     for family in FAMILIES:

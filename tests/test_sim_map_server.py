@@ -15,8 +15,8 @@ import pytest
 import ekfslam_gym  # noqa: F401  (registers the ids)
 from ekfslam_gym.sim import World, make_layout
 from ekfslam_gym.sim.geometry import min_wall_distance
-from ekfslam_gym.sim.map_server import _boundary, load_map, read_image
 from ekfslam_gym.sim.layout_base import wall_runs
+from ekfslam_gym.sim.map_server import _boundary, load_map, read_image
 
 FREE, OCCUPIED, UNKNOWN = 254, 0, 205  # map_saver's grey values
 
