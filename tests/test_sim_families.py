@@ -228,3 +228,15 @@ def test_the_split_is_fixed_disjoint_and_covers_every_family() -> None:
             check_training_family(family, "training envs")
     with pytest.raises(ValueError, match="unknown layout family"):
         family_seeds("castle")
+
+
+def test_layouts_page_shows_every_family_at_every_tier() -> None:
+    """docs/layouts.md's table is what docs/layouts.py writes, and every thumbnail it shows exists."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("docs_layouts", ROOT / "docs" / "layouts.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.main(["--check"]) == 0
+    for family, tier in CASES:
+        assert module.thumbnail_path(family, tier).is_file(), (family, tier)
