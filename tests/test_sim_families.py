@@ -89,16 +89,18 @@ def test_structured_families_draw_their_walls(family: str) -> None:
     assert len(walls) == 4
 
 
-def test_tiers_grow_and_occlude_more() -> None:
+def test_tiers_grow_thin_out_and_occlude_more() -> None:
     for family in FAMILIES:
-        areas, walls = [], []
+        areas, walls, density = [], [], []
         for tier in TIERS:
             layout = _layout(family, tier, 0)
             xmin, ymin, xmax, ymax = layout.bounds
             areas.append((xmax - xmin) * (ymax - ymin))
             walls.append(len(layout.walls))
+            density.append(layout.n_landmarks / areas[-1])
         assert areas[0] < areas[1] < areas[2], family
         assert walls[0] <= walls[1] <= walls[2], family
+        assert density[0] > density[1] > density[2], family
 
 
 def test_maze_is_a_tree_of_corridors() -> None:
