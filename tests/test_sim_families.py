@@ -200,7 +200,26 @@ def test_a_layout_keyword_of_the_wrong_kind_fails_when_the_config_is_built() -> 
         EnvConfig.from_overrides(world={"layout": "rooms", "layout_kwargs": {"n_rooms_x": 2.5}})
     with pytest.raises(ValueError, match=r"world\.layout_kwargs\.width must be a number"):
         EnvConfig.from_overrides(world={"layout": "maze", "layout_kwargs": {"width": "wide"}})
-    EnvConfig.from_overrides(world={"layout": "maze", "layout_kwargs": {"width": 24}})  # an int for a float
+    with pytest.raises(ValueError, match=r"world\.layout_kwargs\.yaml must be a string"):
+        EnvConfig.from_overrides(world={"layout": "map_server", "layout_kwargs": {"yaml": Path("map.yaml")}})
+    # an int where a number is due, numpy scalars and arrays: held as plain Python values (YAML-safe)
+    config = EnvConfig.from_overrides(
+        world={"layout": "maze", "layout_kwargs": {"width": 24, "cell": np.float64(3)}}
+    )
+    assert config.world.layout_kwargs == {"width": 24.0, "cell": 3.0}
+    assert (
+        type(config.world.layout_kwargs["width"]) is float
+        and type(config.world.layout_kwargs["cell"]) is float
+    )
+    surveyed = {
+        "layout": "surveyed",
+        "n_landmarks": 2,
+        "layout_kwargs": {"landmarks": np.array([[1.0, 1.0], [3.0, 2.0]])},
+    }
+    assert EnvConfig.from_overrides(world=surveyed).world.layout_kwargs["landmarks"] == [
+        [1.0, 1.0],
+        [3.0, 2.0],
+    ]
 
 
 def test_a_value_the_generator_refuses_fails_when_the_config_is_built() -> None:
