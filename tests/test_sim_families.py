@@ -251,6 +251,15 @@ def test_the_split_is_fixed_disjoint_and_covers_every_family() -> None:
         family_seeds("castle")
 
 
+def test_a_training_run_refuses_a_held_out_family() -> None:
+    from ekfslam_gym.training.settings import SettingsError, validate_entry
+
+    entry = {"n_timesteps": 10, "env_kwargs": {"world": world_section("maze", "easy")}}
+    with pytest.raises(SettingsError, match="held-out layout family 'maze'"):
+        validate_entry(entry, env_id="EKFSLAM-v0")
+    validate_entry({**entry, "env_kwargs": {"world": world_section("office", "easy")}}, env_id="EKFSLAM-v0")
+
+
 def test_layouts_page_shows_every_family_at_every_tier() -> None:
     """docs/layouts.md's table is what docs/layouts.py writes, and every thumbnail it shows exists."""
     import importlib.util
