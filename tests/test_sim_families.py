@@ -154,6 +154,32 @@ def test_an_episode_runs_on_the_hard_tier(family: str) -> None:
     env.close()
 
 
+@pytest.mark.parametrize(
+    ("name", "kwargs", "message"),
+    [
+        ("pillars", {"pillar_size": 2.5}, "pillar_size must be in"),
+        ("pillars", {"gap": 0.4}, "gap .* too narrow"),
+        ("pillars", {"n_pillars": 400}, "could place only"),
+        ("figure_eight", {"corridor": 1.5}, "too narrow"),
+        ("figure_eight", {"width": 12.0}, "leaves no blocks"),
+        ("office", {"rooms_per_side": 20}, "no room for 20 rooms"),
+        ("office", {"door_width": 0.5}, "door_width .* too narrow"),
+        ("office", {"jitter": 0.5}, "jitter must be in"),
+        ("warehouse", {"n_rows": 14}, "aisle between rows"),
+        ("warehouse", {"shelf_depth": 3.0}, "shelf_depth must be in"),
+        ("warehouse", {"n_cross": 8}, "shelves under 1 m"),
+        ("warehouse", {"end_aisle": 1.0}, "end_aisle"),
+        ("maze", {"cell": 1.5}, "cell must be >= 2"),
+        ("maze", {"cell": 12.0}, "at least 2 x 2 cells"),
+        ("maze", {"braid": 1.0}, "braid must be in"),
+        ("maze", {"width": float("nan")}, "width and height must be finite"),
+    ],
+)
+def test_bad_family_keywords_raise_before_anything_is_drawn(name: str, kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        make_layout(name, np.random.default_rng(0), 10, **kwargs)
+
+
 # ---------------------------------------------------------------------------------------- the free grid
 def test_free_cells_equals_brute_force_distances() -> None:
     rng = np.random.default_rng(0)
