@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SOURCES = {"ekfslam_gym": ROOT / "ekfslam_gym", "ekfslam_gym.agents": ROOT / "agents"}
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("angles", "compiled", "ellipses", "seeds", "packaged", "artefacts"),
+    ("angles", "compiled", "ellipses", "seeds", "packaged", "artefacts", "kernel_types"),
     ("sim", "filter", "graph"),
     ("envs", "data"),
     ("evaluation",),
