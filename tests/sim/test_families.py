@@ -19,7 +19,7 @@ from ekfslam_gym.seeds import HELDOUT_FAMILIES, TRAINING_FAMILIES, check_trainin
 from ekfslam_gym.sim import FAMILIES, LAYOUTS, TIERS, World, layout_keywords, make_layout, world_section
 from ekfslam_gym.sim.geometry import free_cells, min_wall_distance
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CASES = [(family, tier) for family in FAMILIES for tier in TIERS]
 
 
