@@ -42,7 +42,7 @@ def test_the_filter_kernels_take_their_arrays_and_options_bundled():
     from ekfslam_gym.filter import kernels
 
     (arrays, options, *rest), _ = sigutils.normalize_signature(numba_signature(kernels.predict_correct))
-    assert isinstance(arrays, types.BaseTuple) and len(arrays) == 10 and len(options) == 8
+    assert isinstance(arrays, types.BaseTuple) and len(arrays) == 9 and len(options) == 8
     assert len(rest) == 5  # control, its covariance, ids, readings, Q
 
 

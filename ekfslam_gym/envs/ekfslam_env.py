@@ -251,7 +251,7 @@ class EKFSLAMEnv(gym.Env):
         self._mark_and_trail()
         if self._belief_image:
             self._mark_walls()
-        metrics = self._step_metrics(read)
+        metrics = self._step_metrics(read, self._world.pose_tuple)
         self._worst_variance = metrics.worst_variance
         info = self._info(dict.fromkeys(rewards.REWARD_NAMES, 0.0), metrics, 0.0, 0.0, False)
         if self.render_mode == "human":
@@ -279,8 +279,9 @@ class EKFSLAMEnv(gym.Env):
                     break
                 command = (0.0, 0.0)  # a goal reached at once still takes one control step, standing
             commands.append(command)
-            steps.append(self._control_step(*command))
-            if steps[-1].terminated:
+            control_step = self._control_step(*command)
+            steps.append(control_step)
+            if control_step.terminated:
                 break
         self._steps += 1
 
@@ -304,7 +305,8 @@ class EKFSLAMEnv(gym.Env):
         world, rng = self._world, self.np_random
         x0, y0, _ = world.pose_tuple
         collided = world.step(a0 * self._v_max, a1 * self._omega_max)
-        x1, y1, _ = world.pose_tuple
+        true_pose = world.pose_tuple
+        x1, y1, _ = true_pose
         self._path_length += math.hypot(x1 - x0, y1 - y0)
         self._collisions += collided
         self._collided = collided
@@ -317,7 +319,8 @@ class EKFSLAMEnv(gym.Env):
         self._t += 1
         try:
             read = self._filter_update(odometry, readings)
-            failed = not math.isfinite(self._ekf.log_det)
+            log_det = self._ekf.log_det
+            failed = not math.isfinite(log_det)
         except FilterDivergedError:
             failed = True
         if failed:
@@ -329,10 +332,10 @@ class EKFSLAMEnv(gym.Env):
         covered = self._mark_and_trail() * self._cell_area
         if self._belief_image:
             self._mark_walls()
-        metrics = self._step_metrics(read)
+        metrics = self._step_metrics(read, true_pose)
         self._loop_closures += metrics.loop_closures
         self._worst_variance = metrics.worst_variance
-        before, self._telescoped = self._telescoped, Telescoped(self._ekf.log_det)
+        before, self._telescoped = self._telescoped, Telescoped(log_det)
         terms = rewards.evaluate(StepContext(before, self._telescoped, self._pose_cov, collided, covered))
         reward = rewards.weigh(terms, self._weights)
         return ControlStep(terms, reward, metrics, collided, self._is_terminated(), False)
@@ -382,17 +385,18 @@ class EKFSLAMEnv(gym.Env):
         self._last_readings = Readings(read, read_z)
         return read
 
-    def _step_metrics(self, read: np.ndarray) -> StepMetrics:
-        """``compiled.step_metrics`` of the step, ``read`` the slots the filter used. With known association
-        slot j is landmark j; otherwise each slot is scored against the true landmark it holds (slots of
-        clutter and free slots count as unseen, so the done_std end waits for every slot to hold one)."""
+    def _step_metrics(self, read: np.ndarray, true_pose: tuple[float, float, float]) -> StepMetrics:
+        """``compiled.step_metrics`` of the step, ``read`` the slots the filter used, ``true_pose`` the world's
+        ``pose_tuple`` after it. With known association slot j is landmark j; otherwise each slot is scored
+        against the true landmark it holds (slots of clutter and free slots count as unseen, so the done_std end
+        waits for every slot to hold one)."""
         mean, cov, observed, _ = self._belief
         if self._unknown:
             observed, landmarks = self._slot_valid, self._slot_landmarks
         else:
             landmarks = self._true_landmarks
         return StepMetrics._make(compiled.step_metrics(
-            mean, cov, observed, self._world.pose_tuple, landmarks, read, self._last_seen, self._errors,
+            mean, cov, observed, true_pose, landmarks, read, self._last_seen, self._errors,
             self._traces, self._t, self._loop_gap,
         ))  # fmt: skip
 
@@ -417,12 +421,11 @@ class EKFSLAMEnv(gym.Env):
     ) -> dict[str, Any]:
         """The step's ``info`` (``ekfslam_gym.envs.info.INFO_KEYS`` describes each key); arrays the filter updates
         in place are copied, the odometry's are new each step."""
-        mean, cov, _, _ = self._belief
         return {
             "step": self._t,
             "true_pose": self._world.pose,
-            "pose": mean[:3].copy(),
-            "pose_cov": cov[:3, :3].copy(),
+            "pose": self._pose_estimate.copy(),
+            "pose_cov": self._pose_cov.copy(),
             "log_det": self._telescoped.log_det,
             "reward_terms": terms,
             "truth_gain": truth_gain,

@@ -55,7 +55,7 @@ def coverage(c: StepContext) -> float:
 
 
 def pose_variance(c: StepContext) -> float:
-    return -float(c.pose_cov[0, 0] + c.pose_cov[1, 1])
+    return -(c.pose_cov.item(0, 0) + c.pose_cov.item(1, 1))  # item: Python floats, no numpy scalars
 
 
 @dataclass(frozen=True)
@@ -103,11 +103,15 @@ REWARD_TERMS: tuple[RewardTerm, ...] = (
 )
 
 REWARD_NAMES: tuple[str, ...] = tuple(term.name for term in REWARD_TERMS)
+_FUNCTIONS = tuple((term.name, term.value) for term in REWARD_TERMS)
 
 
 def evaluate(context: StepContext) -> dict[str, float]:
     """Every term's unweighted value for one control step, by name, in ``REWARD_TERMS`` order."""
-    return {term.name: term.value(context) for term in REWARD_TERMS}
+    terms = {}
+    for name, value in _FUNCTIONS:  # a plain loop: a comprehension costs a frame of its own every step
+        terms[name] = value(context)
+    return terms
 
 
 def nonzero_weights(weights: object) -> tuple[tuple[str, float], ...]:

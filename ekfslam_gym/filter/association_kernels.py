@@ -282,7 +282,7 @@ def _extend(cov, Hx, Hm, zhat, pair_slot, k, j, nu_new, Q, L, y, d2_at, gates):
 @njit(cache=True)
 def correct_unknown(
     arrays: FilterArrays, options: FilterOptions, readings: F8Array2, Q: F8Array2, track: bool,
-    association: AssociationOptions, slots: I8Array1, new: BoolArray1, forget: I8Array1,
+    association: AssociationOptions, tentative: I8Array1, slots: I8Array1, new: BoolArray1, forget: I8Array1,
 ) -> tuple[float, int, int, int]:  # fmt: skip
     """Associate (``associate``), start new landmarks, correct (``kernels.correct``) and keep the tentative
     landmarks' countdowns, in one call.
@@ -293,7 +293,7 @@ def correct_unknown(
     new landmark has left to be matched again; ``confirm_within`` > 0 starts it for this call's new ones.
     Returns (change of log det Sigma, status, readings used in the update, number of slots to forget).
     """
-    mean, cov, _, observed, _, _, _, _, _, tentative = arrays
+    mean, cov, _, observed, _, _, _, _, _ = arrays
     min_range = options[3]
     method, gates, new_gate, max_nodes, confirm_within = association
     m = readings.shape[0]

@@ -221,7 +221,7 @@ class EKFSLAM:
     def _kernel_arrays(self) -> tuple[np.ndarray, ...]:
         return (
             self._mean, self._cov, self._P, self._observed, self._prior_pose, self._first, self._G_used,
-            self._H_used, self._H_slots, self._tentative,
+            self._H_used, self._H_slots,
         )  # fmt: skip
 
     def _start_tracking(self, pose_cov0: np.ndarray) -> None:
@@ -497,8 +497,8 @@ class EKFSLAM:
         new = np.empty(m, dtype=bool)
         forget = np.empty(self.n_landmarks, dtype=np.int64)
         delta, status, used, n_forget = compiled.correct_unknown(
-            self._arrays, self._options, readings, self._noise(measurement_cov), self._tracking, options, slots,
-            new, forget,
+            self._arrays, self._options, readings, self._noise(measurement_cov), self._tracking, options,
+            self._tentative, slots, new, forget,
         )  # fmt: skip
         self._n_used = used
         if status != codes.OK:
