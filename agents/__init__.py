@@ -20,6 +20,7 @@ import os
 import sys
 from typing import Any
 
+from . import _name_guard  # noqa: F401  (first: refuses the name `agents`)
 from .base import Agent, clip_action, wall_scan
 from .baselines import CircleAgent, LawnmowerAgent, RandomAgent
 from .frontier import FrontierAgent

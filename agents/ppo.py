@@ -106,8 +106,6 @@ def training_record(zip_path: str | Path) -> dict[str, Any] | None:
 
 # policy_kwargs entries that name a class or function, resolved from a dotted name (``resolve_policy_kwargs``).
 CLASS_KWARGS = ("features_extractor_class", "activation_fn", "optimizer_class")
-# Records written before the agents moved under the package (0.2.0) name their classes ``agents.<module>.<Class>``.
-LEGACY_PREFIX = "agents."
 
 
 def import_dotted(name: str) -> Any:
@@ -144,13 +142,7 @@ def load_model(path: str | Path, *, device: str = "cpu", algo: str | None = None
     entry = record.get("entry") if record is not None else None
     custom: dict[str, Any] = {}
     if isinstance(entry, dict) and isinstance(entry.get("policy_kwargs"), dict):
-        named = {
-            key: f"ekfslam_gym.{value}"
-            if isinstance(value, str) and value.startswith(LEGACY_PREFIX)
-            else value
-            for key, value in entry["policy_kwargs"].items()
-        }
-        custom["policy_kwargs"] = resolve_policy_kwargs(named)
+        custom["policy_kwargs"] = resolve_policy_kwargs(entry["policy_kwargs"])
     return algo_class(algo or saved_algo(zip_path, record)).load(
         zip_path, device=device, custom_objects=custom or None
     )

@@ -1,10 +1,10 @@
 """Replay a drive through EKF-SLAM: the project's simulated drive by default, course-format files, or a real
 robot's data set (``--dataset mrclam``, see ``cli.replay_real``).
 
-    python -m ekfslam_gym.replay [--data PATH [--world PATH]] [--steps N] [--sequential]
+    ekfslam-replay [--data PATH [--world PATH]] [--steps N] [--sequential]
         [--init {course,inverse}] [--seed S] [--json] [--save-state FILE.npz]
         [--plot FILE.png] [--gif FILE.gif] [--tum FILE]
-    python -m ekfslam_gym.replay --data MRCLAM_FOLDER [--dataset mrclam] [--variant {ekf,fej,iekf}]
+    ekfslam-replay --data MRCLAM_FOLDER [--dataset mrclam] [--variant {ekf,fej,iekf}]
         [--association {known,nearest,jcbc}] [--robots] [--smoother] [--json] [--plot FILE.png]
 
 Defaults are the course's EKF-SLAM exercise (Freiburg *Robot Mapping*): R = diag(0.1, 0.1, 0.01) on the pose, Q = 0.01 I per reading, landmark

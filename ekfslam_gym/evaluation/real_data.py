@@ -13,7 +13,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from .alignment import SE2Transform
 from .mrclam import RealReplay, landmark_errors
@@ -30,6 +29,8 @@ __all__ = [
 
 def nis_band(window: int = 1, dof: int = 2, confidence: float = 0.95) -> tuple[float, float]:
     """Two-sided chi^2 band of the mean of ``window`` NIS values of ``dof`` degrees of freedom."""
+    from scipy import stats  # here, not at import: scipy.stats costs a second at start-up
+
     alpha = 1.0 - confidence
     lo, hi = stats.chi2.ppf([alpha / 2, 1 - alpha / 2], dof * window) / window
     return float(lo), float(hi)
