@@ -36,7 +36,7 @@ from typing import Any
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 ENV_IDS = ("EKFSLAM-v0", "EKFSLAM-Loop-v0", "EKFSLAM-Large-v0")
-# The config each shipped policy's training run reproduces (models/README.md; tests/test_docs.py holds each to its
+# The config each shipped policy's training run reproduces (models/README.md; tests/docs/test_docs.py holds each to its
 # model's record, models/ppo_<id>_config.yaml, field for field).
 SHIPPED_RECIPES = {
     "EKFSLAM-v0": "configs/ppo_frontier_primitives_bc.yaml",

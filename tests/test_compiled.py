@@ -36,7 +36,7 @@ def test_jit_backend_reproduces_the_golden_rollouts():
     code = "from ekfslam_gym import compiled; assert compiled.backend() == 'jit'"
     subprocess.run([sys.executable, "-c", code], env=env, check=True, cwd=REPO)
     result = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/test_golden_rollouts.py"],
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/envs/test_golden_rollouts.py"],
         env=env, cwd=REPO, capture_output=True, text=True,
     )  # fmt: skip
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]

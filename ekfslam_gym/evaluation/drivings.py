@@ -1,5 +1,5 @@
 """The ways a policy drives, as action sequences, for measuring the filter's consistency under each
-(``bench/consistency.py`` and ``tests/test_consistency_mc.py``).
+(``bench/consistency.py`` and ``tests/evaluation/test_consistency_mc.py``).
 
 Each is (steps, 2) velocity actions in [-1, 1]^2, fractions of (v_max, omega_max), as a policy sends them to
 the env: ``forward`` v ~ U[0, 1], omega ~ U[-1, 1] fresh every step (a fresh policy's jitter); ``random``

@@ -4,7 +4,7 @@ Why not pymunk's ``segment_query_first``: one call costs ~1.5-2.6 µs through cf
 the ~10 landmarks in range and casting 16 beams costs ~40-60 µs per step (``bench/sim.py``), twice the
 simulator's whole budget. The walls never move, so the same tests run here over the (k, 4) segment array,
 culled to the walls within reach first: ~1 µs of arithmetic for both, plus the call overhead
-(``tests/test_sim_geometry.py`` cross-checks them against pymunk and against dense sampling).
+(``tests/sim/test_geometry.py`` cross-checks them against pymunk and against dense sampling).
 
 A wall is a capsule: its centre-line segment ``[x1, y1, x2, y2]`` (metres) swept by ``wall_radius``, which is
 exactly the shape of a ``pymunk.Segment`` with that radius. Angles are radians, wrapped to (-pi, pi].

@@ -146,7 +146,7 @@ def _chipmunk_calls(space: pymunk.Space, control: pymunk.Body, body: pymunk.Body
     Why: pymunk's Python layer costs ~1.7 us per substep here (an attribute hook on every property set, and
     bookkeeping in ``Space.step`` for bodies added or removed during a step, which the robot never does),
     about 6 % of an env step. The direct calls are the same C functions in the same order;
-    ``tests/test_sim.py`` holds them to the Python API's poses and contacts exactly.
+    ``tests/sim/test_world.py`` holds them to the Python API's poses and contacts exactly.
     """
     try:
         from pymunk._chipmunk import lib

@@ -1,4 +1,4 @@
-"""Record the seeded rollouts that ``tests/test_golden_rollouts.py`` holds the env to.
+"""Record the seeded rollouts that ``tests/envs/test_golden_rollouts.py`` holds the env to.
 
 Run once, before a refactor, with ``python tests/golden/record.py``: it writes ``rollouts.npz`` beside this
 file (observations and rewards of a 500-step rollout of every registered id, seed 123, actions from a seeded

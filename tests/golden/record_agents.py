@@ -1,4 +1,4 @@
-"""Record the baselines' actions on a seeded episode, which ``tests/test_golden_agents.py`` holds them to.
+"""Record the baselines' actions on a seeded episode, which ``tests/agents/test_golden_agents.py`` holds them to.
 
 Run once before refactoring an agent: ``python tests/golden/record_agents.py`` writes ``agents.npz`` beside
 this file (the first ``STEPS`` actions of each agent on EKFSLAM-v0 and EKFSLAM-Loop-v0, seed 7).

@@ -1,4 +1,4 @@
-"""Record the simulated drives that ``tests/test_drive.py`` and ``tests/test_smoother.py`` hold the generators to.
+"""Record the simulated drives that ``tests/data/test_drive.py`` and ``tests/graph/test_smoother.py`` hold the generators to.
 
 Run once, before a refactor of ``ekfslam_gym/data/``, with ``python -m tests.golden.record_drives``: it writes
 ``drives.npz`` beside this file, every array of a few seeded drives (the course-format loop drive the replay

@@ -149,7 +149,7 @@ DOCUMENTED_LINES = {
 @pytest.mark.parametrize("name", sorted(DOCUMENTED_LINES))
 def test_the_documented_figures_redraw_from_their_csvs_with_their_baselines_lines(tmp_path, capsys, name):
     """docs/results.md redraws each figure from its committed points, with lines at the baselines' figures."""
-    csv_path = Path(__file__).resolve().parents[1] / "docs" / f"tradeoff_EKFSLAM-{name}.csv"
+    csv_path = Path(__file__).resolve().parents[2] / "docs" / f"tradeoff_EKFSLAM-{name}.csv"
     args = [str(csv_path), "--ci", "shipped policy", "--ci", "baselines", "--annotate", "baselines"]
     assert main(args + ["--plot", str(tmp_path / "figure.png")]) == 0
     _, _, points = read_csv(csv_path)

@@ -16,7 +16,7 @@ import tomllib
 from ekfslam_gym.cli import common
 from ekfslam_gym.cli.common import AGENT_NAMES, command_line
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCRIPTS = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
 SHORT = ["--seeds", "0", "--max-episode-steps", "3", "--no-progress"]
 

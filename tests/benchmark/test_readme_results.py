@@ -10,7 +10,7 @@ import pytest
 
 from ekfslam_gym.benchmark import reference_rows
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+README = Path(__file__).resolve().parents[2] / "README.md"
 COLUMNS = {
     "map log det": "map_log_det",
     "landmark RMSE (m)": "landmark_rmse",

@@ -1,5 +1,5 @@
 """Progress bars only on a terminal: a log, a pipe or CI gets no carriage-return redraws (make demo, train.py,
-evaluate). The demo's own output is checked in tests/test_train.py."""
+evaluate). The demo's own output is checked in tests/training/test_train.py."""
 
 import io
 

@@ -13,7 +13,7 @@ import pytest
 from ekfslam_gym import benchmark
 from ekfslam_gym.cli.benchmark import main
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 REGISTERED = sorted(i for i in gym.registry if i.startswith("EKFSLAM"))
 
 

@@ -18,7 +18,7 @@ from ekfslam_gym.envs.rewards import REWARD_NAMES
 from ekfslam_gym.filter.ekf import FilterDivergedError
 from ekfslam_gym.filter.models import wheel_motion
 
-PAGE = Path(__file__).resolve().parent.parent / "docs" / "belief-and-truth.md"
+PAGE = Path(__file__).resolve().parents[2] / "docs" / "belief-and-truth.md"
 
 
 @pytest.mark.parametrize(

@@ -25,7 +25,7 @@ import yaml
 
 from tests.datapaths import victoria_park_file
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 MARKDOWN = [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]
 HISTORY = {path for path in MARKDOWN if path.name.startswith("research-log")}

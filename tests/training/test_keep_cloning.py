@@ -10,7 +10,7 @@ pytest.importorskip("stable_baselines3")
 from ekfslam_gym.training import artefacts  # noqa: E402
 from ekfslam_gym.training.cloning import behaviour_clone, fit_normalizer  # noqa: E402
 from ekfslam_gym.training.settings import validate_pretrain  # noqa: E402
-from tests.test_imitation import LabelEnv, synthetic  # noqa: E402
+from tests.training.test_imitation import LabelEnv, synthetic  # noqa: E402
 
 
 def test_keep_cloning_settings_validate():
@@ -54,7 +54,7 @@ def _parameters(model):
 
 
 def test_cloning_steps_learn_the_demonstrated_labelling_at_the_scheduled_rate():
-    """On a labelling a policy can learn (tests.test_imitation.synthetic), ten rollouts' cloning steps take an
+    """On a labelling a policy can learn (tests.training.test_imitation.synthetic), ten rollouts' cloning steps take an
     untrained policy from chance to the labels; the rate follows learning_rate * decay**rollout."""
     demos = synthetic()
     model = _model()

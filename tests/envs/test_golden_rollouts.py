@@ -8,7 +8,7 @@ import pytest
 
 from tests.golden.record import ENV_IDS, PREFIX, SETTINGS, rollout
 
-GOLDEN = Path(__file__).resolve().parent / "golden" / "rollouts.npz"
+GOLDEN = Path(__file__).resolve().parents[1] / "golden" / "rollouts.npz"
 
 
 @pytest.mark.parametrize("setting", SETTINGS)

@@ -191,7 +191,7 @@ def test_bad_configs_raise_errors_naming_the_field(overrides, field):
 def test_yaml_configs_match_the_registered_presets():
     from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1] / "configs" / "env"
+    root = Path(__file__).resolve().parents[2] / "configs" / "env"
     assert EnvConfig.from_yaml(root / "default.yaml") == EnvConfig()
     for env_id, name in (("EKFSLAM-Loop-v0", "loop"), ("EKFSLAM-Large-v0", "large")):
         from_yaml = EnvConfig.from_yaml(root / f"{name}.yaml")
@@ -391,7 +391,7 @@ def test_observations_stay_inside_the_space_and_are_finite():
 def test_docs_page_is_generated_from_the_current_docstring():
     from pathlib import Path
 
-    script = Path(__file__).resolve().parents[1] / "docs" / "generate.py"
+    script = Path(__file__).resolve().parents[2] / "docs" / "generate.py"
     result = subprocess.run([sys.executable, str(script), "--check"], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
 

@@ -1,5 +1,5 @@
 """The env-version policy (docs/versioning.md) has teeth: every registered id is pinned by the golden rollouts
-(tests/test_golden_rollouts.py) and by its registered step limit here, so a change of behaviour under an id
+(tests/envs/test_golden_rollouts.py) and by its registered step limit here, so a change of behaviour under an id
 fails until it gets a new version; the changelog has a section for the package's version."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import numpy as np
 import ekfslam_gym
 from tests.golden.record import ENV_IDS, PREFIX
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 REGISTERED = sorted(i for i in gym.registry if i.startswith("EKFSLAM"))
 # The step limit each id was registered with when its version was given; a new limit is a new version.
 STEP_LIMITS = {"EKFSLAM-v0": 500, "EKFSLAM-Loop-v0": 800, "EKFSLAM-Large-v0": 1000}

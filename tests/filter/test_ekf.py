@@ -9,7 +9,7 @@ from scipy import stats
 from ekfslam_gym.filter import COURSE_SETTINGS, EKFSLAM, FilterDivergedError, range_bearing, wrap_angle
 from ekfslam_gym.filter.models import odometry_motion, velocity_motion
 
-from .drives import loop_drive, ring_landmarks
+from tests.drives import loop_drive, ring_landmarks
 
 CONTROL_COV = np.diag([2e-4, 1e-3, 2e-4])
 MEASUREMENT_COV = np.diag([0.01, 0.002])

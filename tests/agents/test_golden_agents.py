@@ -7,7 +7,7 @@ import pytest
 
 from tests.golden.record_agents import AGENT_NAMES, ENV_IDS, actions
 
-GOLDEN = Path(__file__).resolve().parent / "golden" / "agents.npz"
+GOLDEN = Path(__file__).resolve().parents[1] / "golden" / "agents.npz"
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
