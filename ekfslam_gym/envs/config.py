@@ -2,7 +2,7 @@
 ``EKFSLAMEnv.set_max_episode_steps`` replaces it, by a copy with another step limit).
 
 Sections: ``world`` (layout and landmarks), ``robot``, ``sensor`` and ``odometry`` (the simulator's own
-parameter classes), ``filter`` (the filter's own ``FilterSettings``), ``reward``, ``observation``,
+parameter classes), ``filter`` (``FilterConfig``: the filter's and the association's settings), ``reward``, ``observation``,
 ``action``, and the episode settings at the top level. Build one from keyword overrides
 (``EnvConfig.from_overrides(world={"n_landmarks": 50})``) or a YAML file under ``configs/env/``
 (``EnvConfig.from_yaml(path)``); an unknown or invalid value raises ``ValueError`` naming the field, e.g.
@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..filter.settings import FilterSettings
+from ..filter.settings import ASSOCIATION_NAMES, AssociationSettings, FilterSettings, check_association
 from ..sim.odometry import OdometryNoise
 from ..sim.robot import RobotParams
 from ..sim.sensor import SensorParams
@@ -72,8 +72,48 @@ class WorldConfig:
         object.__setattr__(self, "layout_kwargs", dict(self.layout_kwargs))
 
 
-# The env's ``filter`` section is the filter's own settings object, with the filter's defaults.
-FilterConfig = FilterSettings
+@dataclass(frozen=True)
+class FilterConfig(FilterSettings):
+    """The env's ``filter`` section, one flat mapping for the user: the filter's own settings (the fields of
+    ``FilterSettings``, its defaults), how readings find their landmarks (``association``, ``gate_prob``,
+    ``new_gate_prob``, ``confirm_steps``: ``AssociationSettings``' fields and defaults, ``association`` its
+    ``kind``) and how the env starts the estimate (``initial_draw``). The env hands ``settings`` to
+    ``EKFSLAM`` and ``association_settings`` to ``EKFSLAM.correct_unknown``.
+
+    initial_draw: the env starts the filter's pose estimate at a draw from its own prior, N(start, pose_prior I),
+    instead of at the true start (``ekfslam_gym.envs.ekfslam_env.initial_estimate``; the world is unchanged).
+    Started at the truth, the filter counts the prior's variance with no error to match it, so the first steps'
+    pose NEES reads low (2.4 of 3 at step 0; ``docs/filter.md``). Pick it for consistency studies of the first
+    steps; it is off in the v0 ids so that their recorded results stay.
+    """
+
+    association: str = AssociationSettings.kind
+    gate_prob: float = AssociationSettings.gate_prob
+    new_gate_prob: float = AssociationSettings.new_gate_prob
+    confirm_steps: int = AssociationSettings.confirm_steps
+    initial_draw: bool = False
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        names = {name: f"filter.{name}" for name in ASSOCIATION_NAMES} | {"kind": "filter.association"}
+        check_association(self.association, self.gate_prob, self.new_gate_prob, self.confirm_steps, names)
+        _require(isinstance(self.initial_draw, bool), "filter.initial_draw", "must be true or false", self.initial_draw)  # fmt: skip
+        filter_fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(FilterSettings)}
+        object.__setattr__(self, "_settings", FilterSettings(**filter_fields))
+        association = AssociationSettings(
+            self.association, self.gate_prob, self.new_gate_prob, self.confirm_steps
+        )
+        object.__setattr__(self, "_association_settings", association)
+
+    @property
+    def settings(self) -> FilterSettings:
+        """The filter's settings alone (what ``EKFSLAM`` takes)."""
+        return self._settings
+
+    @property
+    def association_settings(self) -> AssociationSettings:
+        """The association's settings alone (what ``EKFSLAM.correct_unknown`` takes)."""
+        return self._association_settings
 
 
 @dataclass(frozen=True)
@@ -217,7 +257,7 @@ class EnvConfig:
     robot: RobotParams = field(default_factory=RobotParams)
     sensor: SensorParams = field(default_factory=SensorParams)
     odometry: OdometryNoise = field(default_factory=OdometryNoise)
-    filter: FilterSettings = field(default_factory=FilterSettings)
+    filter: FilterConfig = field(default_factory=FilterConfig)
     reward: RewardConfig = field(default_factory=RewardConfig)
     observation: ObservationConfig = field(default_factory=ObservationConfig)
     action: ActionConfig = field(default_factory=ActionConfig)

@@ -202,7 +202,7 @@ class EKFSLAMEnv(gym.Env):
         self._world = World(layout, cfg.robot, cfg.sensor, cfg.odometry, None, cfg.dt, cfg.substeps)
         f = cfg.filter
         self._ekf = ekf = EKFSLAM(
-            layout.n_landmarks, f, dt=cfg.dt, measurement_noise=cfg.sensor.cov,
+            layout.n_landmarks, f.settings, dt=cfg.dt, measurement_noise=cfg.sensor.cov,
             initial_pose=initial_estimate(layout.start, f.pose_prior, rng) if f.initial_draw else layout.start,
             min_range=max(cfg.sensor.min_range, 1e-3), wheel_base=self._world.wheel_noise.wheel_base,
         )  # fmt: skip
@@ -368,9 +368,7 @@ class EKFSLAMEnv(gym.Env):
             # Bearing order: the sensor's id order (clutter last) would tell the filter which readings are false.
             order = np.argsort(z[:, 1], kind="stable")
             z, ids = z[order], ids[order]
-        slots, new, forgotten, _ = ekf.correct_unknown(
-            z, f.association, f.gate_prob, f.new_gate_prob, confirm_within=f.confirm_steps
-        )
+        slots, new, forgotten, _ = ekf.correct_unknown(z, f.association_settings)
         false, missed, read, read_z = compiled.tally_associations(
             ids, z, slots, new, forgotten, ekf.observed, self._slot_truth, self._true_landmarks,
             self._slot_landmarks, self._slot_valid,

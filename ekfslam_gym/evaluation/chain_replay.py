@@ -17,6 +17,7 @@ import numpy as np
 
 from ..data.gtsam2d import Gtsam2dDataset
 from ..filter import EKFSLAM
+from ..filter.settings import KNOWN_START_POSE_PRIOR
 from .alignment import SE2Transform
 from .innovations import group_innovations
 
@@ -50,7 +51,7 @@ def replay_chain(dataset: Gtsam2dDataset, variant: str = "ekf", landmark_prior: 
         raise ValueError(f"{dataset.path}: the filter needs the odometry chain 0 -> 1 -> ... in order")
     ekf = EKFSLAM(
         dataset.num_landmarks, motion_model="odometry", variant=variant, landmark_prior=landmark_prior,
-        pose_prior=1e-10, init_mode="inverse", initial_pose=np.zeros(3),
+        pose_prior=KNOWN_START_POSE_PRIOR, init_mode="inverse", initial_pose=np.zeros(3),
     )  # fmt: skip
     order = np.argsort(dataset.reading_pose, kind="stable")
     starts = np.searchsorted(dataset.reading_pose[order], np.arange(steps + 2))

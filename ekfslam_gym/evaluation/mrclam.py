@@ -21,6 +21,13 @@ import numpy as np
 from ..data.mrclam import MRCLAMRun
 from ..envs.association_truth import tally_associations
 from ..filter import EKFSLAM
+from ..filter.settings import (
+    CONFIRM_STEPS,
+    GATE_PROB,
+    KNOWN_START_POSE_PRIOR,
+    NEW_GATE_PROB,
+    AssociationSettings,
+)
 from .alignment import SE2Transform, align_se2
 from .innovations import group_innovations
 
@@ -162,9 +169,9 @@ class ReplaySettings:
     odometry: IncrementNoise = field(default_factory=IncrementNoise)
     init_mode: str = "inverse"
     landmark_prior: float = 100.0
-    gate_prob: float = 0.99
-    new_gate_prob: float = 0.999
-    confirm_steps: int = 5
+    gate_prob: float = GATE_PROB
+    new_gate_prob: float = NEW_GATE_PROB
+    confirm_steps: int = CONFIRM_STEPS
     slots: int = 60
 
 
@@ -224,9 +231,12 @@ def replay_drive(
     landmark_ids = np.asarray(landmark_ids, dtype=np.int64)
     n_slots = len(landmark_ids) if known else settings.slots
     Q = np.diag([settings.range_std**2, settings.bearing_std**2])
+    association = AssociationSettings(
+        settings.association, settings.gate_prob, settings.new_gate_prob, settings.confirm_steps
+    )
     ekf = EKFSLAM(
         n_slots, motion_model="velocity", dt=1.0, variant=settings.variant, measurement_noise=Q,
-        landmark_prior=settings.landmark_prior, pose_prior=1e-10, init_mode=settings.init_mode,
+        landmark_prior=settings.landmark_prior, pose_prior=KNOWN_START_POSE_PRIOR, init_mode=settings.init_mode,
         initial_pose=np.zeros(3),
     )  # fmt: skip
     slot_of = np.full(int(max(landmark_ids.max(initial=0), drive.subject.max(initial=0))) + 1, -1, np.int64)
@@ -276,10 +286,7 @@ def replay_drive(
             else:
                 mean, cov = ekf.mean.copy(), ekf.cov.copy()
                 tic = time.perf_counter()
-                result = ekf.correct_unknown(
-                    z, settings.association, settings.gate_prob, settings.new_gate_prob,
-                    confirm_within=settings.confirm_steps,
-                )  # fmt: skip
+                result = ekf.correct_unknown(z, association)
                 seconds += time.perf_counter() - tic
                 matched = (result.slots >= 0) & ~result.new
                 if np.any(matched):

@@ -4,9 +4,10 @@ Knows nothing of the simulator or the env; ``ekfslam_gym.graph`` is the offline 
 """
 
 from .ekf import COURSE_MEASUREMENT_NOISE, COURSE_MOTION_NOISE, EKFSLAM, FilterDivergedError, Jacobians
-from .settings import COURSE_SETTINGS, FilterSettings
+from .settings import COURSE_SETTINGS, AssociationSettings, FilterSettings
 
 __all__ = [
+    "AssociationSettings",
     "COURSE_MEASUREMENT_NOISE",
     "COURSE_MOTION_NOISE",
     "COURSE_SETTINGS",

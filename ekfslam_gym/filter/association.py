@@ -14,15 +14,12 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
-from typing import Literal, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
-Method = Literal["nearest", "jcbc"]
 METHODS: dict[str, int] = {"nearest": 1, "jcbc": 2}  # = association_kernels.METHOD_*, without loading numba
 
-DEFAULT_GATE = 0.99
-DEFAULT_NEW_GATE = 0.999
 # JCBC's search stops after this many hypothesis nodes and keeps the best found (bounds the cost of a step).
 MAX_NODES = 20000
 
@@ -93,7 +90,11 @@ def check_probability(value: float, name: str) -> None:
         raise ValueError(f"{name} must be a probability in (0, 1), got {value!r}")
 
 
-def check_method(method: str) -> int:
-    if method not in METHODS:
-        raise ValueError(f"association method must be one of {sorted(METHODS)}, got {method!r}")
-    return METHODS[method]
+def check_method(kind: str) -> int:
+    """The kernels' code of association ``kind``; ``known`` has none (the sensor's ids go to ``correct``)."""
+    if kind not in METHODS:
+        raise ValueError(
+            f"association.kind must be one of {sorted(METHODS)} to associate from the readings, got {kind!r}"
+            + (" (known association uses the sensor's ids: EKFSLAM.correct)" if kind == "known" else "")
+        )
+    return METHODS[kind]

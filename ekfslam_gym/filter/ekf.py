@@ -19,7 +19,7 @@ from .. import compiled
 from ..angles import wrap_angle
 from . import association, codes
 from .association import UnknownCorrection
-from .settings import FilterSettings
+from .settings import AssociationSettings, FilterSettings
 
 _FLOAT64 = np.dtype(np.float64)
 _INT64 = np.dtype(np.int64)
@@ -53,18 +53,23 @@ class FilterDivergedError(RuntimeError):
     """The filter's covariance lost positive definiteness (an innovation covariance or Sigma itself)."""
 
 
+_SETTING_NAMES = tuple(f.name for f in dataclasses.fields(FilterSettings))
+
+
 def _settings(settings: FilterSettings | None, changes: dict[str, Any]) -> FilterSettings:
-    """``settings`` (default ``FilterSettings()``) with ``changes`` to its fields, validated."""
+    """``settings`` (default ``FilterSettings()``) with ``changes`` to its fields, validated: a plain
+    ``FilterSettings`` (a subclass, such as the env's section, gives its filter fields and nothing more)."""
     if settings is None:
         settings = FilterSettings()
     elif not isinstance(settings, FilterSettings):
         raise TypeError(f"settings must be a FilterSettings, got {type(settings).__name__}")
+    elif type(settings) is not FilterSettings:
+        settings = FilterSettings(**{name: getattr(settings, name) for name in _SETTING_NAMES})
     if not changes:
         return settings
-    known = [f.name for f in dataclasses.fields(FilterSettings)]
-    unknown = sorted(set(changes) - set(known))
+    unknown = sorted(set(changes) - set(_SETTING_NAMES))
     if unknown:
-        raise TypeError(f"unknown filter setting(s) {unknown}; known: {known}")
+        raise TypeError(f"unknown filter setting(s) {unknown}; known: {list(_SETTING_NAMES)}")
     return dataclasses.replace(settings, **changes)
 
 
@@ -102,8 +107,9 @@ class EKFSLAM:
     Args:
         n_landmarks: number of landmark slots (fixed; readings name them by 0-based index).
         settings: how it filters (``ekfslam_gym.filter.settings.FilterSettings``, whose docstring explains
-            each field; default ``FilterSettings()``). Its ``association``, ``gate_prob``, ``new_gate_prob``
-            and ``confirm_steps`` are for the caller to pass to ``correct_unknown``, as the env does.
+            each field; default ``FilterSettings()``). How readings find their landmarks is not the
+            filter's setting but each call's: ``associate`` and ``correct_unknown`` take an
+            ``AssociationSettings``.
         dt: control period in seconds for the velocity model.
         wheel_base: metres between the wheels, for the wheels model (the odometer's, e.g.
             ``WheelOdometryNoise.wheel_base``).
@@ -338,7 +344,8 @@ class EKFSLAM:
 
         ``ids`` (m,) are 0-based landmark slots, ``readings`` (m, 2) are (range m, bearing rad). Raw bearings
         need not be wrapped: the innovation is. Raises ``FilterDivergedError`` if an innovation covariance is
-        not positive definite.
+        not positive definite: a batch update then changes nothing, a sequential one keeps the readings it
+        applied before the one that failed, and ``log_det`` counts them (``_fail``).
         """
         ids = np.ascontiguousarray(np.asarray(ids, dtype=np.int64).reshape(-1))
         readings = np.asarray(readings, dtype=float).reshape(-1, 2) if len(ids) else np.empty((0, 2))
@@ -353,7 +360,7 @@ class EKFSLAM:
         )  # fmt: skip
         self._n_used = used
         if status != codes.OK:
-            self._raise_correction_status(status, ids)
+            self._fail(status, delta, ids)
         self._after_call(delta)
         return delta
 
@@ -362,6 +369,22 @@ class EKFSLAM:
         if readings > self._H_slots.shape[0]:
             self._H_used = np.zeros((2 * readings, 2, 5))
             self._H_slots = np.zeros(2 * readings, dtype=np.int64)
+
+    def _fail(self, status: int, applied: float, ids: np.ndarray) -> None:
+        """Raise for a correction's failure ``status`` after counting ``applied``, the change of log det Sigma of
+        what the kernel applied before it failed, so that ``log_det`` stays log det ``cov``.
+
+        Only a sequential correction applies anything before failing (its earlier readings, and inverse
+        initialisations); bad ids and readings are found before anything moves, and a failed batch update
+        is undone by the kernel. The readings applied are kept rather than rolled back: each was a complete
+        correction (sequential updating is a sequence of one-reading corrections, and the one that failed
+        changed nothing), so the state is the filter after the readings before it, a valid belief; undoing
+        them would cost a copy of Sigma, O(N^2), at every sequential call to serve a failure that ends the
+        env's episode.
+        """
+        if applied != 0.0:
+            self._after_call(applied)
+        self._raise_correction_status(status, ids)
 
     def _raise_correction_status(self, status: int, ids: np.ndarray) -> None:
         if status == codes.BAD_ID:
@@ -408,29 +431,26 @@ class EKFSLAM:
         if status == codes.BAD_INPUT:
             raise ValueError(f"control and its noise must be finite, got {control!r}")
         # Both calls' bookkeeping (``_after_call`` twice): tracking, and no resync after the first (checked above).
+        # A failed correction's ``change`` is what it applied before failing (``_fail``), counted all the same.
         self._log_det += delta
-        if correction_status != codes.OK:
-            self._calls_since_resync += 1
-            self._raise_correction_status(correction_status, ids)
-        self._log_det += change
+        self._log_det += change  # two additions, as two calls make them (the same rounding)
         self._calls_since_resync += 2
+        if correction_status != codes.OK:
+            self._raise_correction_status(correction_status, ids)
         if self.resync_every and self._calls_since_resync >= self.resync_every:
             self.resync()
         return delta + change
 
     # ------------------------------------------------------------------ unknown correspondences
-    def associate(
-        self, readings, method: association.Method = "jcbc", gate: float = association.DEFAULT_GATE, *,
-        measurement_cov=None,
-    ) -> np.ndarray:  # fmt: skip
+    def associate(self, readings, settings: AssociationSettings, *, measurement_cov=None) -> np.ndarray:
         """The initialised landmark slot each reading (m, 2) comes from, -1 for none (new, clutter or ambiguous).
 
-        ``method``: ``"nearest"`` (each reading alone takes its most likely landmark inside the gate) or
+        ``settings.kind``: ``"nearest"`` (each reading alone takes its most likely landmark inside the gate) or
         ``"jcbc"`` (joint compatibility branch and bound, Neira & Tardos 2001: the most pairings whose stacked
-        innovation passes the joint test). ``gate``: the probability of the chi-squared gates (2k degrees of
-        freedom for k pairings). Changes nothing.
+        innovation passes the joint test); ``settings.gate_prob``: the probability of the chi-squared gates
+        (2k degrees of freedom for k pairings). Changes nothing.
         """
-        code, gates, _ = self._association_settings(method, gate, association.DEFAULT_NEW_GATE)
+        code, gates, _ = self._association_settings(settings)
         readings = self._readings(readings)
         if not np.all(np.isfinite(readings)):
             raise ValueError("readings must be finite")
@@ -443,26 +463,20 @@ class EKFSLAM:
         return slots
 
     def correct_unknown(
-        self, readings, method: association.Method = "jcbc", gate: float = association.DEFAULT_GATE,
-        new_gate: float = association.DEFAULT_NEW_GATE, *, confirm_within: int = 0, measurement_cov=None,
-    ) -> UnknownCorrection:  # fmt: skip
+        self, readings, settings: AssociationSettings, *, measurement_cov=None
+    ) -> UnknownCorrection:
         """Associate the readings (m, 2) as ``associate`` does, then correct with the matched ones as ``correct``
-        does, initialising new landmarks: a reading that matches nothing and lies outside the ``new_gate``
-        chi-squared gate (2 dof) of every initialised landmark starts one in the first free slot (none left:
-        discarded); readings between the two gates are discarded, being neither clearly known nor clearly new.
+        does, initialising new landmarks: a reading that matches nothing and lies outside the
+        ``settings.new_gate_prob`` chi-squared gate (2 dof) of every initialised landmark starts one in the first
+        free slot (none left: discarded); readings between the two gates are discarded, being neither clearly
+        known nor clearly new.
 
-        ``confirm_within`` > 0 makes a new landmark tentative: unless one of the next ``confirm_within`` calls
-        matches a reading to it, it is forgotten (``forget``), so clutter does not fill the fixed-size state
-        (a simple form of the provisional landmark list of Thrun, Burgard & Fox, sec. 10.3.3). Returns an
+        ``settings.confirm_steps`` > 0 makes a new landmark tentative: unless one of the next ``confirm_steps``
+        calls matches a reading to it, it is forgotten (``forget``), so clutter does not fill the fixed-size
+        state (a simple form of the provisional landmark list of Thrun, Burgard & Fox, sec. 10.3.3). Returns an
         ``UnknownCorrection`` (slots used, which were new, slots forgotten, change of log det Sigma).
         """
-        code, gates, new_threshold = self._association_settings(method, gate, new_gate)
-        if (
-            isinstance(confirm_within, bool)
-            or not isinstance(confirm_within, (int, np.integer))
-            or confirm_within < 0
-        ):
-            raise ValueError(f"confirm_within must be an integer >= 0, got {confirm_within!r}")
+        code, gates, new_threshold = self._association_settings(settings)
         readings = self._readings(readings)
         m = readings.shape[0]
         self._reserve_jacobians(m)
@@ -473,14 +487,12 @@ class EKFSLAM:
             self._mean, self._cov, self._P, self._observed, readings, self._noise(measurement_cov),
             self.min_range, self.init_mode == "course", self.update_mode == "sequential", self._tracking,
             self._variant_code, self.iterations, self._prior_pose, self._first, self._H_used, self._H_slots,
-            code, gates, new_threshold, association.MAX_NODES, int(confirm_within), self._tentative, slots, new,
+            code, gates, new_threshold, association.MAX_NODES, settings.confirm_steps, self._tentative, slots, new,
             forget,
         )  # fmt: skip
         self._n_used = used
-        if status == codes.BAD_INPUT:
-            raise ValueError("readings must be finite")
-        if status == codes.NOT_PD:
-            raise FilterDivergedError("innovation covariance is not positive definite")
+        if status != codes.OK:
+            self._fail(status, delta, slots)
         self._after_call(delta)
         forgotten = forget[:n_forget]
         if n_forget:
@@ -519,21 +531,18 @@ class EKFSLAM:
         self.resync()
         return self._log_det - before
 
-    def _association_settings(self, method, gate, new_gate) -> tuple[int, np.ndarray, float]:
-        """(method code, joint gates chi2(2k, gate) for k = 1..n, new-landmark threshold chi2(2, new_gate)),
-        validated and computed once per setting."""
-        key = (method, gate, new_gate)
-        settings = self._association_cache.get(key)
-        if settings is None:
-            code = association.check_method(method)
-            association.check_probability(gate, "gate")
-            association.check_probability(new_gate, "new_gate")
-            if new_gate < gate:
-                raise ValueError(f"new_gate must be >= gate, got {new_gate!r} < {gate!r}")
-            gates = association.gate_table(gate, self.n_landmarks)
-            settings = (code, gates, association.chi2_even_ppf(new_gate, 2))
-            self._association_cache[key] = settings
-        return settings
+    def _association_settings(self, settings: AssociationSettings) -> tuple[int, np.ndarray, float]:
+        """(method code, joint gates chi2(2k, gate_prob) for k = 1..n, new-landmark threshold
+        chi2(2, new_gate_prob)), computed once per settings object (validated when it was built)."""
+        if not isinstance(settings, AssociationSettings):
+            raise TypeError(f"settings must be an AssociationSettings, got {type(settings).__name__}")
+        found = self._association_cache.get(settings)
+        if found is None:
+            code = association.check_method(settings.kind)
+            gates = association.gate_table(settings.gate_prob, self.n_landmarks)
+            found = (code, gates, association.chi2_even_ppf(settings.new_gate_prob, 2))
+            self._association_cache[settings] = found
+        return found
 
     @staticmethod
     def _readings(readings) -> np.ndarray:

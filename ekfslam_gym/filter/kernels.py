@@ -518,7 +518,8 @@ def correct(
     closer than ``min_range`` never initialise). Batch: all readings in one update (inverse initialisations
     after it, from the corrected pose); sequential: one reading at a time, relinearising between them.
     A landmark course-initialised for an update that fails (NOT_PD) is returned to what it was, so a failed
-    batch correction changes nothing (a failed sequential one keeps the readings applied before it).
+    batch correction changes nothing (a failed sequential one keeps the readings applied before it, and the
+    change of log det it returns is theirs, for the caller to count).
     Returns (change of log det Sigma, status, number of readings used in updates).
     """
     m = ids.shape[0]

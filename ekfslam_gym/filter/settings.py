@@ -1,10 +1,13 @@
-"""The filter's settings: one frozen, validated object with one set of defaults, for ``EKFSLAM`` and the env.
+"""The filter's settings, one frozen, validated object each, with one set of defaults.
 
-Each choice is defined here once (the names a setting takes and their meaning); ``EKFSLAM``, the env's
-``filter`` section, the command lines and the benchmarks read them from here. The defaults are the env's (the
-wheels model, inverse initialisation, a 100 m^2 landmark prior, a 1e-10 pose prior); ``COURSE_SETTINGS``
-holds the course's (the odometry model, course initialisation, a 1000 m^2 landmark prior, a zero pose
-prior), which its replay (``ekfslam_gym.evaluation.replay``) uses.
+``FilterSettings`` is how ``EKFSLAM`` filters (every field is one it reads); ``AssociationSettings`` is how
+``EKFSLAM.associate`` and ``EKFSLAM.correct_unknown`` find the landmark each reading comes from when the
+sensor's ids are not used. Each choice (the names a setting takes and their meaning) and each shared value is
+defined here once; the env's ``filter`` section (``ekfslam_gym.envs.config.FilterConfig``), the replays, the
+command lines and the benchmarks read them from here. The defaults are the env's (the wheels model, inverse
+initialisation, a 100 m^2 landmark prior, ``KNOWN_START_POSE_PRIOR``); ``COURSE_SETTINGS`` holds the course's
+(the odometry model, course initialisation, a 1000 m^2 landmark prior, a zero pose prior), which its replay
+(``ekfslam_gym.evaluation.replay``) uses.
 
 Loads neither numba nor the kernels: registering the env ids and validating a config stay cheap.
 """
@@ -13,10 +16,9 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal, get_args
-
-from .association import DEFAULT_GATE, DEFAULT_NEW_GATE
 
 MotionModel = Literal["wheels", "odometry", "velocity"]
 Variant = Literal["ekf", "fej", "iekf"]
@@ -30,10 +32,23 @@ INIT_MODES: tuple[str, ...] = get_args(InitMode)
 UPDATE_MODES: tuple[str, ...] = get_args(UpdateMode)
 ASSOCIATIONS: tuple[str, ...] = get_args(Association)
 
+# The pose prior (m^2 and rad^2 on x, y, theta) of a filter that starts where the robot truly is, to 10
+# micrometres: Sigma is definite (log det finite) from the start. The env's default and the replays'.
+KNOWN_START_POSE_PRIOR = 1e-10
+# The env's landmark prior (m^2): bounded, so discovering a landmark pays a bounded amount of log det.
+LANDMARK_PRIOR = 100.0
+# The course's: its landmarks at 1000 m^2, its pose known exactly (Sigma singular until the first prediction).
+COURSE_LANDMARK_PRIOR = 1000.0
+COURSE_POSE_PRIOR = 0.0
+# The association gates' probabilities and the tentative landmarks' lifetime (``AssociationSettings``).
+GATE_PROB = 0.99
+NEW_GATE_PROB = 0.999
+CONFIRM_STEPS = 5
+
 
 def _check(condition: bool, name: str, message: str, value: Any) -> None:
     if not condition:
-        raise ValueError(f"filter.{name} {message}, got {value!r}")
+        raise ValueError(f"{name} {message}, got {value!r}")
 
 
 def _choice(name: str, value: Any, choices: tuple[str, ...]) -> None:
@@ -51,8 +66,8 @@ def _integer(name: str, value: Any, minimum: int) -> None:
 
 @dataclass(frozen=True)
 class FilterSettings:
-    """How the EKF-SLAM filters: its motion model, linearisation, landmark initialisation, priors and data
-    association. The sensor's and odometer's noise are not settings: they come with the readings.
+    """How the EKF-SLAM filters: its motion model, linearisation, landmark initialisation and priors. The
+    sensor's and odometer's noise are not settings: they come with the readings.
 
     motion_model: ``wheels`` (wheel travels (left, right) and a sideways slip, which reads a slide along a
     wall as a slip rather than as large turns; the simulator's ``WheelOdometryNoise``), ``odometry``
@@ -69,19 +84,8 @@ class FilterSettings:
     discovering a landmark pays a bounded amount. pose_prior: the initial pose variance (m^2 and rad^2) on each
     of x, y, theta; 0 (the course's) leaves Sigma singular, log det -inf, until the first prediction.
     resync_every: filter calls between exact Cholesky re-synchronisations of the running log det (0: never).
-    association: how readings find their landmarks: ``known`` (the sensor's ids), ``nearest`` (each reading
-    alone takes its most likely landmark inside the gate) or ``jcbc`` (joint compatibility branch and bound,
-    Neira & Tardos 2001), the latter two from the readings alone (``ekfslam_gym.filter.association``).
-    gate_prob: probability of the chi-squared association gates. new_gate_prob (>= gate_prob): a reading that
-    matches nothing and lies outside this gate of every landmark starts a new one in a free slot; between the
-    gates it is discarded. confirm_steps: a new landmark not matched again within this many corrections is
-    forgotten (its slot freed, so clutter does not fill the map; 0: never).
-    initial_draw: the env starts the filter's pose estimate at a draw from its own prior, N(start, pose_prior I),
-    instead of at the true start (``ekfslam_gym.envs.ekfslam_env.initial_estimate``; the world is unchanged).
-    Started at the truth, the filter counts the prior's variance with no error to match it, so the first steps'
-    pose NEES reads low (2.4 of 3 at step 0; ``docs/filter.md``). Pick it for consistency studies of the first
-    steps; it is off in the v0 ids so that their recorded results stay (it is planned as the default of the
-    next env version, ``docs/versioning.md``).
+
+    Errors name the field as the env's config does (``filter.variant must be ekf|fej|iekf, got 'ukf'``).
     """
 
     motion_model: str = "wheels"
@@ -89,41 +93,77 @@ class FilterSettings:
     iterations: int = 5
     init_mode: str = "inverse"
     update: str = "batch"
-    landmark_prior: float = 100.0
-    pose_prior: float = 1e-10
+    landmark_prior: float = LANDMARK_PRIOR
+    pose_prior: float = KNOWN_START_POSE_PRIOR
     resync_every: int = 1000
-    association: str = "known"
-    gate_prob: float = DEFAULT_GATE
-    new_gate_prob: float = DEFAULT_NEW_GATE
-    confirm_steps: int = 5
-    initial_draw: bool = False
 
     def __post_init__(self) -> None:
-        _choice("motion_model", self.motion_model, MOTION_MODELS)
-        _choice("variant", self.variant, VARIANTS)
-        _integer("iterations", self.iterations, 1)
-        _choice("init_mode", self.init_mode, INIT_MODES)
-        _choice("update", self.update, UPDATE_MODES)
-        _check(_number(self.landmark_prior) and self.landmark_prior > 0, "landmark_prior", "must be > 0",
+        _choice("filter.motion_model", self.motion_model, MOTION_MODELS)
+        _choice("filter.variant", self.variant, VARIANTS)
+        _integer("filter.iterations", self.iterations, 1)
+        _choice("filter.init_mode", self.init_mode, INIT_MODES)
+        _choice("filter.update", self.update, UPDATE_MODES)
+        _check(_number(self.landmark_prior) and self.landmark_prior > 0, "filter.landmark_prior", "must be > 0",
                self.landmark_prior)  # fmt: skip
-        _check(
-            _number(self.pose_prior) and self.pose_prior >= 0, "pose_prior", "must be >= 0", self.pose_prior
-        )
-        _integer("resync_every", self.resync_every, 0)
-        _choice("association", self.association, ASSOCIATIONS)
-        for name in ("gate_prob", "new_gate_prob"):
-            value = getattr(self, name)
-            _check(_number(value) and 0.0 < value < 1.0, name, "must be in (0, 1)", value)
-        _integer("confirm_steps", self.confirm_steps, 0)
-        _check(
-            isinstance(self.initial_draw, bool), "initial_draw", "must be true or false", self.initial_draw
-        )
-        _check(self.new_gate_prob >= self.gate_prob, "new_gate_prob", "must be >= filter.gate_prob",
-               self.new_gate_prob)  # fmt: skip
+        _check(_number(self.pose_prior) and self.pose_prior >= 0, "filter.pose_prior", "must be >= 0",
+               self.pose_prior)  # fmt: skip
+        _integer("filter.resync_every", self.resync_every, 0)
+
+
+# AssociationSettings' field -> the name its errors give; the env's section passes its own (``filter.*``).
+ASSOCIATION_NAMES: Mapping[str, str] = {
+    "kind": "association.kind",
+    "gate_prob": "association.gate_prob",
+    "new_gate_prob": "association.new_gate_prob",
+    "confirm_steps": "association.confirm_steps",
+}
+
+
+def check_association(
+    kind: Any,
+    gate_prob: Any,
+    new_gate_prob: Any,
+    confirm_steps: Any,
+    names: Mapping[str, str] = ASSOCIATION_NAMES,
+) -> None:
+    """Validate association settings, naming each field by ``names`` (``ValueError`` on the first bad one)."""
+    _choice(names["kind"], kind, ASSOCIATIONS)
+    for name, value in (("gate_prob", gate_prob), ("new_gate_prob", new_gate_prob)):
+        _check(_number(value) and 0.0 < value < 1.0, names[name], "must be in (0, 1)", value)
+    _integer(names["confirm_steps"], confirm_steps, 0)
+    _check(
+        new_gate_prob >= gate_prob, names["new_gate_prob"], f"must be >= {names['gate_prob']}", new_gate_prob
+    )
+
+
+@dataclass(frozen=True)
+class AssociationSettings:
+    """How readings find their landmarks when the sensor's ids are not used (``EKFSLAM.correct_unknown``).
+
+    kind: ``known`` (the sensor's ids: nothing to associate; ``EKFSLAM.correct`` takes them), ``nearest``
+    (each reading alone takes its most likely landmark inside the gate) or ``jcbc`` (joint compatibility
+    branch and bound, Neira & Tardos 2001), the latter two from the readings alone
+    (``ekfslam_gym.filter.association``). gate_prob: probability of the chi-squared association gates.
+    new_gate_prob (>= gate_prob): a reading that matches nothing and lies outside this gate of every landmark
+    starts a new one in a free slot; between the gates it is discarded. confirm_steps: a new landmark not
+    matched again within this many corrections is forgotten (its slot freed, so clutter does not fill the
+    map; 0: never).
+    """
+
+    kind: str = "known"
+    gate_prob: float = GATE_PROB
+    new_gate_prob: float = NEW_GATE_PROB
+    confirm_steps: int = CONFIRM_STEPS
+
+    def __post_init__(self) -> None:
+        check_association(self.kind, self.gate_prob, self.new_gate_prob, self.confirm_steps)
 
 
 # The course's filter (its replay and its figures): odometry model, course initialisation, landmarks at
 # 1000 m^2, the pose known exactly at the start.
 COURSE_SETTINGS = FilterSettings(
-    motion_model="odometry", init_mode="course", landmark_prior=1000.0, pose_prior=0.0
+    motion_model="odometry",
+    init_mode="course",
+    landmark_prior=COURSE_LANDMARK_PRIOR,
+    pose_prior=COURSE_POSE_PRIOR,
 )

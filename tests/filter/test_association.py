@@ -12,12 +12,14 @@ from scipy import stats
 import ekfslam_gym  # noqa: F401  (registers the env ids)
 from ekfslam_gym import compiled
 from ekfslam_gym.envs.config import EnvConfig
-from ekfslam_gym.filter import COURSE_SETTINGS, EKFSLAM
+from ekfslam_gym.filter import COURSE_SETTINGS, EKFSLAM, AssociationSettings
 from ekfslam_gym.filter.association import chi2_even_ppf, gate_table
 from ekfslam_gym.filter.models import range_bearing
 from ekfslam_gym.sim.sensor import RangeBearingSensor, SensorParams
 
 Q = np.diag([0.05**2, 0.01**2])
+NEAREST = AssociationSettings("nearest", confirm_steps=0)
+JCBC = AssociationSettings("jcbc", confirm_steps=0)
 
 
 def _reading(pose, landmark):
@@ -66,8 +68,8 @@ def test_two_landmarks_closer_than_the_gate_confuse_nearest_and_not_jcbc():
     readings = [_reading((0, 0, -d), a), _reading((0, 0, -d), b)]
     assert readings[0] == pytest.approx(_reading((0, 0, 0), b))
     gate = stats.chi2.ppf(0.99, 2)
-    assert np.all(ekf.associate(readings, "nearest") == [1, 1])
-    assert np.all(ekf.associate(readings, "jcbc") == [0, 1])
+    assert np.all(ekf.associate(readings, NEAREST) == [1, 1])
+    assert np.all(ekf.associate(readings, JCBC) == [0, 1])
     # Both readings pass the individual gate of both landmarks: the ambiguity is real.
     S = _innovation_cov(ekf, 0)
     assert (2 * d) ** 2 / S[1, 1] < gate
@@ -90,9 +92,9 @@ def test_clutter_next_to_a_landmark_takes_it_under_nearest_only():
     nu = clutter - true
     assert nu @ np.linalg.solve(S, nu) < stats.chi2.ppf(0.99, 2)
     readings = [clutter, true]
-    assert np.all(ekf.associate(readings, "nearest") == [0, 0])
-    assert np.all(ekf.associate(readings, "jcbc") == [-1, 0])
-    result = ekf.copy().correct_unknown(readings, "jcbc")
+    assert np.all(ekf.associate(readings, NEAREST) == [0, 0])
+    assert np.all(ekf.associate(readings, JCBC) == [-1, 0])
+    result = ekf.copy().correct_unknown(readings, JCBC)
     assert np.all(result.slots == [-1, 0]) and not result.new.any()  # clutter discarded, not a new landmark
 
 
@@ -100,17 +102,18 @@ def test_a_reading_far_from_every_landmark_starts_one_in_the_first_free_slot():
     ekf = _mapped([(3.0, 1.0), (-2.0, 4.0)], 5, slots=[1, 3])
     far = _reading((0, 0, 0), (1.0, -4.0))
     known = _reading((0, 0, 0), (3.0, 1.0))
-    result = ekf.correct_unknown([known, far], "jcbc")
+    result = ekf.correct_unknown([known, far], JCBC)
     assert np.all(result.slots == [1, 0]) and np.all(result.new == [False, True])
     assert np.all(ekf.observed == [True, True, False, True, False])
     np.testing.assert_allclose(ekf.landmarks[0], (1.0, -4.0), atol=1e-6)
     # With no free slot left, a new landmark is dropped.
     full = _mapped([(3.0, 1.0), (-2.0, 4.0)], 2)
-    assert np.all(full.correct_unknown([known, far]).slots == [0, -1])
+    assert np.all(full.correct_unknown([known, far], JCBC).slots == [0, -1])
 
 
 @pytest.mark.parametrize("method", ["nearest", "jcbc"])
 def test_gating_rejects_an_outlier_and_only_a_far_one_is_new(method):
+    settings = AssociationSettings(method)
     ekf = _mapped([(3.0, 1.0)], 3)
     true = _reading((0, 0, 0), (3.0, 1.0))
     info = np.linalg.inv(_innovation_cov(ekf, 0))
@@ -120,11 +123,11 @@ def test_gating_rejects_an_outlier_and_only_a_far_one_is_new(method):
     def offset(d2):  # a range error of Mahalanobis distance d2
         return true + np.array([math.sqrt(d2 / info[0, 0]), 0.0])
 
-    assert ekf.associate([offset(inside)], method)[0] == 0
-    assert ekf.associate([offset(between)], method)[0] == -1
-    result = ekf.copy().correct_unknown([offset(between)], method)
+    assert ekf.associate([offset(inside)], settings)[0] == 0
+    assert ekf.associate([offset(between)], settings)[0] == -1
+    result = ekf.copy().correct_unknown([offset(between)], settings)
     assert result.slots[0] == -1 and not result.new[0] and result.delta == 0.0
-    result = ekf.copy().correct_unknown([offset(100.0)], method)
+    result = ekf.copy().correct_unknown([offset(100.0)], settings)
     assert result.slots[0] == 1 and result.new[0]
 
 
@@ -149,7 +152,7 @@ def test_running_log_det_stays_exact_through_association_initialisation_and_forg
         readings = [z + rng.normal(0, [0.05, 0.01]) for z in readings]
         readings += [np.array([rng.uniform(0.5, 5.0), rng.uniform(-math.pi, math.pi)])]  # clutter
         before = ekf.log_det
-        result = ekf.correct_unknown(readings, method, confirm_within=2)
+        result = ekf.correct_unknown(readings, AssociationSettings(method, confirm_steps=2))
         forgotten += len(result.forgotten)
         new += int(result.new.sum())
         exact = np.linalg.slogdet(ekf.cov)[1]
@@ -172,14 +175,37 @@ def test_forget_returns_a_slot_to_the_prior():
 
 def test_bad_association_arguments_raise():
     ekf = _mapped([(3.0, 1.0)], 2)
-    with pytest.raises(ValueError, match="association method"):
-        ekf.associate([[1.0, 0.0]], "known")
-    with pytest.raises(ValueError, match="gate"):
-        ekf.associate([[1.0, 0.0]], "jcbc", gate=1.5)
-    with pytest.raises(ValueError, match="new_gate"):
-        ekf.correct_unknown([[1.0, 0.0]], "jcbc", gate=0.99, new_gate=0.9)
+    with pytest.raises(
+        ValueError, match=r"association.kind must be one of \['jcbc', 'nearest'\].*EKFSLAM.correct"
+    ):
+        ekf.associate([[1.0, 0.0]], AssociationSettings("known"))
+    with pytest.raises(TypeError, match="AssociationSettings"):
+        ekf.associate([[1.0, 0.0]], "jcbc")
     with pytest.raises(ValueError, match="finite"):
-        ekf.correct_unknown([[np.nan, 0.0]])
+        ekf.correct_unknown([[np.nan, 0.0]], JCBC)
+
+
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        (dict(kind="icp"), "association.kind must be known|nearest|jcbc, got 'icp'"),
+        (dict(gate_prob=1.5), r"association.gate_prob must be in \(0, 1\), got 1.5"),
+        (dict(new_gate_prob=0.9), "association.new_gate_prob must be >= association.gate_prob, got 0.9"),
+        (dict(confirm_steps=-1), "association.confirm_steps must be an integer >= 0, got -1"),
+        (dict(confirm_steps=True), "association.confirm_steps must be an integer >= 0, got True"),
+    ],
+)
+def test_bad_association_settings_raise_naming_the_field(changes, message):
+    with pytest.raises(ValueError, match=message):
+        AssociationSettings(**changes)
+
+
+def test_the_env_section_hands_out_the_association_settings():
+    config = EnvConfig.from_overrides(
+        filter={"association": "nearest", "gate_prob": 0.95, "confirm_steps": 2}
+    )
+    assert config.filter.association_settings == AssociationSettings("nearest", 0.95, confirm_steps=2)
+    assert EnvConfig().filter.association_settings == AssociationSettings()
 
 
 def test_tally_counts_false_and_missed_associations():

@@ -364,3 +364,42 @@ def test_running_log_det_and_pose_given_map_hold_over_a_long_drive_without_resyn
         if t % 50 == 0 or t == 1499:
             check_bookkeeping(ekf)
     assert ekf.observed.sum() > 20
+
+
+def _fails_after_one_reading(call):
+    """A sequential correction whose first reading is applied and whose second fails, with log det checked
+    against slogdet right after the failure.
+
+    The first reading, at 1e308 m (finite, so it passes the input check), course-initialises a landmark so far
+    away that its expected range overflows: its update still applies (it reads the heading alone, a finite,
+    definite Sigma) but leaves the mean NaN, so the second reading's innovation covariance is NaN and the
+    correction fails there. ``call(ekf, ids, readings)`` runs the correction."""
+    ekf = make_filter(3, init_mode="course", update="sequential", pose_prior=0.01, resync_every=0)
+    ekf.correct([0], [[2.0, 0.3]])
+    before = ekf.log_det
+    with pytest.raises(FilterDivergedError):
+        call(ekf, np.array([1, 0], dtype=np.int64), np.array([[1e308, 0.5], [2.0, 0.2]]))
+    assert ekf.observed[1] and not np.all(np.isfinite(ekf.mean))  # the first reading was applied
+    sign, exact = np.linalg.slogdet(ekf.cov)
+    assert sign > 0 and exact < before - 0.1  # it moved Sigma: the heading became better known
+    assert abs(ekf.log_det - exact) <= log_det_tolerance(exact)
+    conditioned = np.linalg.inv(np.linalg.inv(ekf.cov)[:3, :3])
+    np.testing.assert_allclose(ekf.pose_cov_given_map, conditioned, rtol=1e-7, atol=1e-12)
+
+
+def test_log_det_counts_the_readings_a_failed_sequential_correction_applied():
+    _fails_after_one_reading(lambda ekf, ids, z: ekf.correct(ids, z))
+
+
+def test_log_det_counts_the_readings_a_failed_sequential_update_applied():
+    def update(ekf, ids, z):  # the env's path: prediction and correction in one kernel call
+        ekf.update(np.zeros(3), 1e-6 * np.eye(3), ids, z)
+
+    _fails_after_one_reading(update)
+
+
+def test_log_det_counts_the_readings_a_failed_unknown_correction_applied():
+    from ekfslam_gym.filter import AssociationSettings
+
+    # jcbc matches the 2 m reading to landmark 0 and starts a new landmark for the far one in slot 1
+    _fails_after_one_reading(lambda ekf, ids, z: ekf.correct_unknown(z, AssociationSettings("jcbc")))
