@@ -5,7 +5,7 @@ installed as ``ekfslam_gym.agents``), and layers that import only the layers bel
     sim | filter | graph
     envs | data
     evaluation
-    agents
+    agents | replay (the recorded drives replayed through the filter)
     training (itself ordered: settings, demonstrations, artefacts, cloning, keep_cloning, pretraining, run, sweep)
     benchmark | pretrained (the protocol; the shipped policies with their envs)
     cli (the command lines, each also ``python -m ekfslam_gym.cli.<name>``)
@@ -37,7 +37,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("sim", "filter", "graph"),
     ("envs", "data"),
     ("evaluation",),
-    ("agents",),
+    ("agents", "replay"),
     ("training",),
     ("benchmark", "pretrained"),
     ("cli",),
@@ -193,8 +193,9 @@ def test_the_checks_catch_what_they_forbid():
     """An upward import (lazy or not), a peer import, a cycle and a training import against the order."""
     upward = {"ekfslam_gym.evaluation.rollout": {"ekfslam_gym.agents"}, "ekfslam_gym.agents": set()}
     assert layer_violations(upward) == [
-        "ekfslam_gym.evaluation.rollout imports ekfslam_gym.agents (('agents',) is not below ('evaluation',))"
+        "ekfslam_gym.evaluation.rollout imports ekfslam_gym.agents (('agents', 'replay') is not below ('evaluation',))"
     ]
+    assert layer_violations({"ekfslam_gym.replay.mrclam": {"ekfslam_gym.agents.base"}})  # peers, independent
     assert layer_violations({"ekfslam_gym.sim.world": {"ekfslam_gym.filter.ekf"}})  # peers are independent
     assert layer_violations({"ekfslam_gym.envs.config": {"ekfslam_gym.sim.robot"}}) == []
     assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
