@@ -51,6 +51,9 @@ PROBE = (
 # A loop of ~110 m, one lap at 0.2 m a step (524 steps), 200 landmarks within 2.25 m of it: ~8 readings a step.
 RECORDING = dict(n_landmarks=200, field_size=40.0, min_separation=0.5, width=30.0, height=25.0, corner_radius=3.0,
                  max_range=2.5, laps=1, step_length=0.2)  # fmt: skip
+SMOKE_RECORDING = dict(
+    n_landmarks=20, laps=1
+)  # --smoke: the course-sized drive, a check that the script runs
 # The course's EKF-SLAM as its lecture notes write it (bench/ekf.py times its single steps): full n x n products.
 FULL_MATRIX = """
 import json, math, sys
@@ -109,10 +112,10 @@ def commands() -> list[str]:
     return sorted(s.name for s in scripts if s.name.startswith("ekfslam-") and (BIN / s.name).is_file())
 
 
-def write_recording(folder: Path) -> tuple[Path, Path]:
+def write_recording(folder: Path, recording: dict) -> tuple[Path, Path]:
     from ekfslam_gym.data.synthetic import simulate_drive
 
-    return simulate_drive(0, **RECORDING).write(folder)
+    return simulate_drive(0, **recording).write(folder)
 
 
 def main() -> None:
@@ -126,7 +129,8 @@ def main() -> None:
     probe = json.loads(wall_time([*python, PROBE], env)[1])
     helps = {name: [str(BIN / name), "--help"] for name in commands()}
     with tempfile.TemporaryDirectory() as tmp:
-        data, world = write_recording(Path(tmp))
+        recording = SMOKE_RECORDING if args.smoke else RECORDING
+        data, world = write_recording(Path(tmp), recording)
         programs = {
             **{name: [*python, program] for name, program in PROGRAMS.items()},
             "make": [*python, MAKE],
@@ -147,7 +151,9 @@ def main() -> None:
         f"kernels: {probe['backend']}; imported numba: {probe['numba']}, scipy: {probe['scipy']}, torch: {probe['torch']}"
     )
     for name in PROGRAMS:
-        print(f"{name:12s} new process import + make + reset + step: {medians[name]:.3f} s (median of {repeats})")
+        print(
+            f"{name:12s} new process import + make + reset + step: {medians[name]:.3f} s (median of {repeats})"
+        )
     print(f"ratio EKFSLAM-v0 / CartPole-v1: {medians['EKFSLAM-v0'] / medians['CartPole-v1']:.2f}")
     base = medians["make"]
     print(f"\nimport ekfslam_gym + make EKFSLAM-v0: {base:.3f} s; each command's --help against it:")
@@ -156,12 +162,14 @@ def main() -> None:
     worst = max(helps, key=medians.get)
     print(f"slowest --help: {worst}, {medians[worst] / base:.2f}x the import + make")
     print(
-        f"\n200-landmark replay end to end ({RECORDING['n_landmarks']} landmarks, process included): "
+        f"\n{recording['n_landmarks']}-landmark replay end to end (process included): "
         f"ekfslam-replay {medians['replay']:.3f} s, full-matrix form {medians['full-matrix']:.3f} s; "
         f"{medians['full-matrix'] / medians['replay']:.1f}x faster"
     )
     gap = max(abs(a - b) for a, b in zip(poses["replay"], poses["full-matrix"]))
-    print(f"final poses: ekfslam-replay {poses['replay']}, full-matrix {poses['full-matrix']} (max difference {gap:.1e})")
+    print(
+        f"final poses: ekfslam-replay {poses['replay']}, full-matrix {poses['full-matrix']} (max difference {gap:.1e})"
+    )
 
 
 if __name__ == "__main__":
