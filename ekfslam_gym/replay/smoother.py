@@ -4,11 +4,10 @@
 keyframes) and measures the filter's trajectory against the smoother's: the trajectory gap (rms and largest
 distance at the smoother's poses), with the smoother's chi^2 and, for a surveyed drive, its landmark errors.
 
-For a drive (``mrclam.Drive``):
-The graph keeps one pose per time readings were taken (a keyframe) and the start: the odometry between two
-keyframes becomes one pose-pose factor, its relative pose composed through the same velocity-model steps the
-filter predicts with and its covariance propagated through their Jacobians (G Sigma G^T + V M V^T, M the
-filter's step noise); every known-association reading is a range-bearing factor. A prior pins the first pose at
+For a drive (``mrclam.Drive``) the graph keeps one pose per time readings were taken (a keyframe) and the
+start: the odometry between two keyframes becomes one pose-pose factor, its relative pose composed through the
+same velocity-model steps the filter predicts with and its covariance propagated through their Jacobians
+(G Sigma G^T + V M V^T, M the filter's step noise); every known-association reading is a range-bearing factor. A prior pins the first pose at
 the origin, where the filter starts. Levenberg-Marquardt (``graph.optimizer``) minimises chi^2 = sum e^T Omega e.
 """
 
