@@ -24,9 +24,8 @@ $(STAMP): pyproject.toml | $(BIN)/python
 
 # The hot-path kernels are compiled ahead of time by setup.py (see ekfslam_gym/compiled.py); rebuild them in
 # place whenever their sources change, or the package falls back to numba's JIT (correct, slower to start).
-KERNEL_SOURCES := setup.py ekfslam_gym/compiled.py $(wildcard ekfslam_gym/angles.py ekfslam_gym/*/*kernels*.py \
-	ekfslam_gym/filter/models.py ekfslam_gym/filter/codes.py ekfslam_gym/sim/geometry.py \
-	ekfslam_gym/envs/observation_codes.py ekfslam_gym/envs/association_truth.py)
+# The sources are compiled.SOURCES, printed by compiled.py run as a plain script (no package import).
+KERNEL_SOURCES := setup.py ekfslam_gym/compiled.py $(shell $(PYTHON) ekfslam_gym/compiled.py)
 AOT_STAMP := $(VENV)/.aot-kernels
 
 $(AOT_STAMP): $(STAMP) $(KERNEL_SOURCES)

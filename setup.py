@@ -1,8 +1,10 @@
 """Build hook: compile the env's hot-path numba kernels ahead of time into ``ekfslam_gym._aot``.
 
 Everything else about the package is in ``pyproject.toml``. ``ekfslam_gym/compiled.py`` lists the kernels and
-their signatures and explains why; this only runs ``numba.pycc`` over them at install time. If that fails (no
-compiler, a numba without ``pycc``), the install goes on and the package uses numba's JIT instead.
+explains why, each kernel's annotations give its signature (``ekfslam_gym/kernel_types.py``); this only runs
+``numba.pycc`` over them at install time. If that fails (no compiler, a numba without ``pycc``), the install
+raises where ``EKFSLAM_GYM_REQUIRE_AOT=1`` is set (CI), and otherwise goes on with a warning, the package then
+using numba's JIT (and saying so when it first loads a kernel).
 """
 
 from __future__ import annotations
@@ -38,22 +40,22 @@ class BuildKernels(build_ext):
             super().build_extension(ext)
             return
         target = Path(self.get_ext_fullpath(ext.name))
+        compiled = _kernel_table()
         try:
             from numba.pycc import CC
 
-            compiled = _kernel_table()
+            kernel_types = importlib.import_module("ekfslam_gym.kernel_types")
             cc = CC(target.name.split(".")[0], "ekfslam_gym.compiled")
             cc.output_dir = str(target.parent)
             cc.output_file = target.name
-            for name, (module, function, signature) in compiled.KERNELS.items():
-                cc.export(name, signature)(getattr(importlib.import_module(module), function).py_func)
+            for name, module in compiled.KERNELS.items():
+                kernel = getattr(importlib.import_module(module), name)
+                cc.export(name, kernel_types.numba_signature(kernel))(kernel.py_func)
             cc.export("aot_digest", "UniTuple(i8, 4)()")(compiled.digest_kernel(compiled.sources_digest()))
             cc.compile()
-        except Exception as error:  # the JIT fallback keeps the package working
-            print(
-                f"warning: ahead-of-time kernels not built ({error!r}); numba's JIT will be used",
-                file=sys.stderr,
-            )
+        except Exception as error:
+            # raises under EKFSLAM_GYM_REQUIRE_AOT, else warns: numba's JIT takes over
+            compiled.build_failed(error)
 
 
 # The repository's top-level folders that install inside the package (the project's layout keeps them at the top):

@@ -8,8 +8,8 @@ sources, and this module hands those out. Where that extension is absent (a buil
 compiler, or ``EKFSLAM_GYM_JIT=1`` in the environment) it hands out the numba JIT functions instead: same
 sources, same results, slower start.
 
-The AOT functions do not check their arguments: callers pass exactly the dtypes and C-contiguous layouts in
-the signatures below (the Python wrappers around them convert). Use: ``from ekfslam_gym import compiled``,
+The AOT functions do not check their arguments: callers pass exactly the dtypes and C-contiguous layouts of
+the kernels' annotations (the Python wrappers around them convert). Use: ``from ekfslam_gym import compiled``,
 then ``compiled.predict(...)``; the first access of a name resolves it.
 """
 
@@ -18,128 +18,45 @@ from __future__ import annotations
 import hashlib
 import importlib
 import os
+import sys
 import warnings
 from pathlib import Path
 
-_F8_1 = "f8[::1]"
-_F8_2 = "f8[:, ::1]"
-
-# name -> (source module, function, numba signature of the exported specialisation)
-KERNELS: dict[str, tuple[str, str, str]] = {
-    "predict": (
-        "ekfslam_gym.filter.kernels",
-        "predict",
-        f"Tuple((f8, i8))({_F8_1}, {_F8_2}, {_F8_2}, i8, {_F8_1}, f8, f8, {_F8_2}, b1, b1, {_F8_1}, b1, {_F8_2})",
-    ),
-    "correct": (
-        "ekfslam_gym.filter.kernels",
-        "correct",
-        f"Tuple((f8, i8, i8))({_F8_1}, {_F8_2}, {_F8_2}, b1[::1], i8[::1], {_F8_2}, {_F8_2}, f8, b1, b1, b1, "
-        f"i8, i8, {_F8_1}, {_F8_2}, f8[:, :, ::1], i8[::1])",
-    ),
-    "associate": (
-        "ekfslam_gym.filter.association_kernels",
-        "associate",
-        f"i8({_F8_1}, {_F8_2}, b1[::1], {_F8_2}, {_F8_2}, f8, i8, {_F8_1}, i8, i8[::1], {_F8_1})",
-    ),
-    "correct_unknown": (
-        "ekfslam_gym.filter.association_kernels",
-        "correct_unknown",
-        f"Tuple((f8, i8, i8, i8))({_F8_1}, {_F8_2}, {_F8_2}, b1[::1], {_F8_2}, {_F8_2}, f8, b1, b1, b1, i8, i8, "
-        f"{_F8_1}, {_F8_2}, f8[:, :, ::1], i8[::1], i8, {_F8_1}, f8, i8, i8, i8[::1], i8[::1], b1[::1], i8[::1])",
-    ),
-    "predict_correct": (
-        "ekfslam_gym.filter.kernels",
-        "predict_correct",
-        f"Tuple((f8, i8, f8, i8, i8))({_F8_1}, {_F8_2}, {_F8_2}, b1[::1], i8, {_F8_1}, f8, f8, {_F8_2}, b1, "
-        f"{_F8_1}, b1, {_F8_2}, i8[::1], {_F8_2}, {_F8_2}, f8, b1, b1, i8, i8, {_F8_2}, f8[:, :, ::1], i8[::1])",
-    ),
-    "min_wall_distance": ("ekfslam_gym.sim.geometry", "min_wall_distance", f"{_F8_1}({_F8_2}, {_F8_2})"),
-    "visible_landmarks": (
-        "ekfslam_gym.sim.geometry",
-        "visible_landmarks",
-        f"i8(f8, f8, f8, {_F8_2}, {_F8_2}, f8, f8, f8, f8, i8[::1], {_F8_2})",
-    ),
-    "add_reading_noise": ("ekfslam_gym.sim.geometry", "add_reading_noise", f"void({_F8_2}, {_F8_2}, f8, f8)"),
-    "cast_rays": (
-        "ekfslam_gym.sim.geometry",
-        "cast_rays",
-        f"void(f8, f8, f8, {_F8_1}, {_F8_2}, f8, f8, {_F8_1})",
-    ),
-    "accept_spaced": ("ekfslam_gym.sim.geometry", "accept_spaced", f"i8({_F8_2}, {_F8_2}, i8, f8)"),
-    "connected_component": (
-        "ekfslam_gym.sim.geometry",
-        "connected_component",
-        "b1[:, ::1](b1[:, ::1], i8, i8)",
-    ),
-    "odometry_reading": (
-        "ekfslam_gym.sim.odometry_kernels",
-        "odometry_reading",
-        f"void(f8, f8, f8, f8, f8, f8, {_F8_1}, {_F8_1}, {_F8_1}, {_F8_2}, {_F8_1})",
-    ),
-    "velocity_reading": (
-        "ekfslam_gym.sim.odometry_kernels",
-        "velocity_reading",
-        f"void(f8, f8, f8, f8, f8, f8, f8, {_F8_1}, {_F8_1}, {_F8_1}, {_F8_2}, {_F8_1})",
-    ),
-    "tally_associations": (
-        "ekfslam_gym.envs.association_truth",
-        "tally_associations",
-        f"Tuple((i8, i8, i8[::1], {_F8_2}))(i8[::1], {_F8_2}, i8[::1], b1[::1], i8[::1], b1[::1], i8[::1], {_F8_2}, "
-        f"{_F8_2}, b1[::1])",
-    ),
-    "travel_distance": (
-        "ekfslam_gym.envs.clearance_kernels",
-        "travel_distance",
-        f"f8({_F8_1}, {_F8_1}, b1[::1], f8, f8)",
-    ),
-    "scan_clearances": (
-        "ekfslam_gym.envs.clearance_kernels",
-        "scan_clearances",
-        f"UniTuple(f8, 3)({_F8_1}, {_F8_1}, {_F8_1}, f8, f8, f8, b1)",
-    ),
-    "mark_coverage": (
-        "ekfslam_gym.envs.kernels",
-        "mark_coverage",
-        f"i8({_F8_2}, {_F8_1}, {_F8_1}, f8, f8, f8)",
-    ),
-    "fill_observation": (
-        "ekfslam_gym.envs.kernels",
-        "fill_observation",
-        f"void(f4[::1], i8[::1], {_F8_1}, {_F8_1}, {_F8_2}, b1[::1], f8, {_F8_2}, {_F8_1}, {_F8_2}, {_F8_1}, f8)",
-    ),
-    "mark_walls": (
-        "ekfslam_gym.envs.kernels",
-        "mark_walls",
-        f"i8({_F8_2}, {_F8_1}, {_F8_1}, f8, {_F8_1}, {_F8_1}, f8)",
-    ),
-    "fill_belief_image": (
-        "ekfslam_gym.envs.kernels",
-        "fill_belief_image",
-        f"void(f4[::1], i8, {_F8_2}, {_F8_2}, {_F8_1}, {_F8_1}, {_F8_2}, b1[::1], f8, f8)",
-    ),
-    "step_metrics": (
-        "ekfslam_gym.envs.kernels",
-        "step_metrics",
-        f"Tuple((f8, f8, i8, f8, i8, f8, f8))({_F8_1}, {_F8_2}, b1[::1], UniTuple(f8, 3), {_F8_2}, i8[::1], "
-        f"i8[::1], {_F8_1}, {_F8_1}, i8, i8)",
-    ),
-    "wheel_reading": (
-        "ekfslam_gym.sim.odometry_kernels",
-        "wheel_reading",
-        f"void({_F8_2}, f8, f8, {_F8_1}, {_F8_1}, {_F8_1}, {_F8_2}, {_F8_1})",
-    ),
-    "measure_step": (
-        "ekfslam_gym.sim.measurement_kernels",
-        "measure_step",
-        f"void(f8, f8, f8, f8, f8, f8, f8, f8, {_F8_1}, {_F8_1}, {_F8_1}, {_F8_2}, {_F8_1}, {_F8_2}, f8, f8)",
-    ),
+# name -> the module whose function of that name is the kernel. Each kernel's signature, the specialisation the
+# build exports, is written as its annotations (``ekfslam_gym.kernel_types``).
+KERNELS: dict[str, str] = {
+    "predict": "ekfslam_gym.filter.kernels",
+    "correct": "ekfslam_gym.filter.kernels",
+    "predict_correct": "ekfslam_gym.filter.kernels",
+    "associate": "ekfslam_gym.filter.association_kernels",
+    "correct_unknown": "ekfslam_gym.filter.association_kernels",
+    "min_wall_distance": "ekfslam_gym.sim.geometry",
+    "visible_landmarks": "ekfslam_gym.sim.geometry",
+    "add_reading_noise": "ekfslam_gym.sim.geometry",
+    "cast_rays": "ekfslam_gym.sim.geometry",
+    "accept_spaced": "ekfslam_gym.sim.geometry",
+    "connected_component": "ekfslam_gym.sim.geometry",
+    "free_cells": "ekfslam_gym.sim.geometry",
+    "odometry_reading": "ekfslam_gym.sim.odometry_kernels",
+    "velocity_reading": "ekfslam_gym.sim.odometry_kernels",
+    "wheel_reading": "ekfslam_gym.sim.odometry_kernels",
+    "measure_step": "ekfslam_gym.sim.measurement_kernels",
+    "tally_associations": "ekfslam_gym.envs.association_truth",
+    "travel_distance": "ekfslam_gym.envs.clearance_kernels",
+    "scan_clearances": "ekfslam_gym.envs.clearance_kernels",
+    "mark_coverage": "ekfslam_gym.envs.kernels",
+    "fill_observation": "ekfslam_gym.envs.kernels",
+    "mark_walls": "ekfslam_gym.envs.kernels",
+    "fill_belief_image": "ekfslam_gym.envs.kernels",
+    "step_metrics": "ekfslam_gym.envs.kernels",
 }
 
-# Every file the kernels' machine code depends on, relative to the package: the build compiles their digest
-# into the extension (``aot_digest()``), and an extension built from other sources (an editable install whose
-# kernels were edited since) is not used.
+# Every file the kernels' machine code and signatures depend on, relative to the package: the build compiles
+# their digest into the extension (``aot_digest()``), and an extension built from other sources (an editable
+# install whose kernels were edited since) is not used. The Makefile reads this list (``python compiled.py``);
+# a test holds it to the kernel modules and what they import from the package.
 SOURCES: tuple[str, ...] = (
+    "kernel_types.py",
     "angles.py",
     "filter/codes.py",
     "filter/models.py",
@@ -154,10 +71,12 @@ SOURCES: tuple[str, ...] = (
     "envs/association_truth.py",
 )
 AOT_MODULE = "ekfslam_gym._aot"
+# Set (to anything but 0) where a missing ahead-of-time build is an error, not a fallback: CI, release builds.
+REQUIRE_AOT = "EKFSLAM_GYM_REQUIRE_AOT"
 
 
 def sources_digest() -> tuple[int, ...]:
-    """SHA-256 over the kernel sources and the signature table, as four int64 (what the build compiles in)."""
+    """SHA-256 over the kernel table and the kernel sources, as four int64 (what the build compiles in)."""
     package = Path(__file__).resolve().parent
     digest = hashlib.sha256(repr(sorted(KERNELS.items())).encode())
     for relative in SOURCES:
@@ -176,12 +95,31 @@ def digest_kernel(parts: tuple[int, ...]):
     return aot_digest
 
 
+def build_failed(error: Exception) -> None:
+    """What the install does when the ahead-of-time build fails (``setup.py``): raise where ``REQUIRE_AOT`` is
+    set, else say so on stderr and go on (the package then uses numba's JIT, and warns when it first does)."""
+    if os.environ.get(REQUIRE_AOT, "") not in ("", "0"):
+        raise RuntimeError(
+            f"the ahead-of-time kernels were not built, and {REQUIRE_AOT} is set: {error!r}"
+        ) from error
+    rule = "!" * 100
+    message = f"warning: ahead-of-time kernels not built ({error!r}); numba's JIT will be used ({REQUIRE_AOT}=1: fail)"
+    print(f"{rule}\n{message}\n{rule}", file=sys.stderr)
+
+
 def _load_aot():
     if os.environ.get("EKFSLAM_GYM_JIT", "") not in ("", "0"):
         return None
     try:
         module = importlib.import_module(AOT_MODULE)
     except ImportError:
+        warnings.warn(
+            "ekfslam_gym: the ahead-of-time kernels were not built at install; numba's JIT compiles them on first "
+            f"use instead (about 40 s once, then cached). Reinstall with {REQUIRE_AOT}=1 to see why the build "
+            "failed, or set EKFSLAM_GYM_JIT=1 to choose the JIT and silence this",
+            RuntimeWarning,
+            stacklevel=2,
+        )
         return None
     if tuple(module.aot_digest()) != sources_digest():
         warnings.warn(
@@ -194,7 +132,7 @@ def _load_aot():
     return module
 
 
-_aot = _load_aot()
+_aot = None if __name__ == "__main__" else _load_aot()  # run as a script it only lists the sources
 
 
 def backend() -> str:
@@ -204,11 +142,15 @@ def backend() -> str:
 
 def __getattr__(name: str):
     try:
-        module, function, _ = KERNELS[name]
+        module = KERNELS[name]
     except KeyError:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
     kernel = getattr(_aot, name, None) if _aot is not None else None
     if kernel is None:
-        kernel = getattr(importlib.import_module(module), function)
+        kernel = getattr(importlib.import_module(module), name)
     globals()[name] = kernel
     return kernel
+
+
+if __name__ == "__main__":  # the Makefile's list of kernel sources, without importing the package
+    print(" ".join(f"ekfslam_gym/{source}" for source in SOURCES))

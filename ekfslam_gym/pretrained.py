@@ -42,17 +42,15 @@ def load_pretrained(env_id: str = "EKFSLAM-v0", **agent_kwargs: Any) -> Any:
 def model_env(path: str | Path) -> tuple[str, dict[str, Any]]:
     """(env id, env settings) from the training record beside the saved model at ``path``; ValueError without
     one."""
-    from ekfslam_gym.agents.ppo import model_paths, training_record
+    from ekfslam_gym.artefacts import RECORD_FILE, RECORD_SUFFIX, model_paths, record_beside
 
     zip_path, _ = model_paths(path)
-    record = training_record(zip_path)
-    if record is None or not record.get("env_id"):
+    record = record_beside(zip_path)
+    if record is None or not record.env_id:
         raise ValueError(
-            f"no training record naming the env beside {zip_path} (<model>_config.yaml or config.yaml)"
+            f"no training record naming the env beside {zip_path} (<model>{RECORD_SUFFIX} or {RECORD_FILE})"
         )
-    entry = record.get("entry")
-    env_kwargs = entry.get("env_kwargs") if isinstance(entry, Mapping) else None
-    return str(record["env_id"]), dict(env_kwargs or {})
+    return record.env_id, dict(record.env_kwargs or {})
 
 
 def make_env_for_model(
@@ -64,7 +62,7 @@ def make_env_for_model(
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from ekfslam_gym.agents.ppo import model_paths
+    from ekfslam_gym.artefacts import model_paths
     from ekfslam_gym.evaluation.rollout import make_env, merge_env_kwargs
 
     env_id, trained = model_env(path)

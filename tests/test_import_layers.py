@@ -1,7 +1,8 @@
 """The import contract: no import cycle anywhere in ``ekfslam_gym`` (the repository's ``agents/`` folder included,
 installed as ``ekfslam_gym.agents``), and layers that import only the layers below them, lowest first:
 
-    angles | compiled | ellipses | seeds | packaged (the shipped files, found by importlib.resources)
+    angles | compiled | ellipses | seeds | packaged | artefacts (the shipped files, found by importlib.resources;
+        the names of a training run's files and its record's parser)
     sim | filter | graph
     envs | data
     evaluation
@@ -10,7 +11,9 @@ installed as ``ekfslam_gym.agents``), and layers that import only the layers bel
     benchmark | pretrained (the protocol; the shipped policies with their envs)
     cli (the command lines, each also ``python -m ekfslam_gym.cli.<name>``)
 
-Packages on one line are independent of each other. Every ``import`` statement counts, those inside functions
+Packages on one line are independent of each other. Inside ``agents``, the planners' shared pieces
+(``agents.navigation``: the grid, walls, paths, frontiers, the veto) import no agent, so another env's planners
+reuse them alone. Every ``import`` statement counts, those inside functions
 (lazy imports) too. The graph is read from the sources with ``ast``, so nothing is imported to check it.
 
 One name per module: the checkout's top-level ``agents/``, ``configs/`` and ``models/`` folders are the packages
@@ -33,7 +36,7 @@ SOURCES = {"ekfslam_gym": ROOT / "ekfslam_gym", "ekfslam_gym.agents": ROOT / "ag
 MAPPED_FOLDERS = ("agents", "configs", "models")  # top-level folders installed inside the package (setup.py)
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("angles", "compiled", "ellipses", "seeds", "packaged"),
+    ("angles", "compiled", "ellipses", "seeds", "packaged", "artefacts", "kernel_types"),
     ("sim", "filter", "graph"),
     ("envs", "data"),
     ("evaluation",),
@@ -129,6 +132,19 @@ def training_violations(graph: Mapping[str, Iterable[str]]) -> list[str]:
     return sorted(found)
 
 
+def navigation_violations(graph: Mapping[str, Iterable[str]]) -> list[str]:
+    """Every import of an agents module outside ``agents.navigation`` (and the angles it reads) from inside it."""
+    prefix = "ekfslam_gym.agents.navigation"
+    found = []
+    for module, targets in graph.items():
+        if module == prefix or module.startswith(prefix + "."):
+            for target in targets:
+                inside = target == prefix or target.startswith(prefix + ".")
+                if target.startswith("ekfslam_gym.agents") and not inside:
+                    found.append(f"{module} imports {target}")
+    return sorted(found)
+
+
 def cycles(graph: Mapping[str, Iterable[str]]) -> list[list[str]]:
     """The import cycles: strongly connected components of more than one module (Tarjan)."""
     index: dict[str, int] = {}
@@ -189,6 +205,11 @@ def test_training_imports_one_way(graph):
     assert training_violations(graph) == []
 
 
+def test_the_planners_shared_pieces_import_no_agent(graph):
+    assert "ekfslam_gym.agents.navigation.paths" in graph
+    assert navigation_violations(graph) == []
+
+
 def test_the_checks_catch_what_they_forbid():
     """An upward import (lazy or not), a peer import, a cycle and a training import against the order."""
     upward = {"ekfslam_gym.evaluation.rollout": {"ekfslam_gym.agents"}, "ekfslam_gym.agents": set()}
@@ -200,6 +221,10 @@ def test_the_checks_catch_what_they_forbid():
     assert layer_violations({"ekfslam_gym.envs.config": {"ekfslam_gym.sim.robot"}}) == []
     assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert training_violations({"ekfslam_gym.training.cloning": {"ekfslam_gym.training.run"}})
+    assert navigation_violations(
+        {"ekfslam_gym.agents.navigation.paths": {"ekfslam_gym.agents.frontier.agent"}}
+    )
+    assert not navigation_violations({"ekfslam_gym.agents.frontier.agent": {"ekfslam_gym.agents.navigation"}})
 
 
 def test_lazy_imports_are_read(tmp_path):

@@ -70,7 +70,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.resume is not None:
         try:
             env_id, seed, entry = read_run(args.resume)
-        except FileNotFoundError as error:
+        except (FileNotFoundError, ValueError) as error:  # no record, or not a complete one
             parser.error(str(error))
         if args.timesteps is not None:
             entry["n_timesteps"] = args.timesteps

@@ -13,11 +13,22 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..kernel_types import BoolArray1, F8Array2, I8Array1
+
 
 @njit(cache=True)
 def tally_associations(
-    truth, z, slots, new, forgotten, observed, slot_truth, true_landmarks, slot_landmarks, valid
-):
+    truth: I8Array1,
+    z: F8Array2,
+    slots: I8Array1,
+    new: BoolArray1,
+    forgotten: I8Array1,
+    observed: BoolArray1,
+    slot_truth: I8Array1,
+    true_landmarks: F8Array2,
+    slot_landmarks: F8Array2,
+    valid: BoolArray1,
+) -> tuple[int, int, I8Array1, F8Array2]:
     """Update ``slot_truth`` (n,) and ``slot_landmarks`` (n, 2) (the true position each slot holds) for the
     step's readings (true ids ``truth`` (m,), readings ``z`` (m, 2), the filter's ``slots`` (m,) and ``new``
     (m,)) and ``forgotten`` slots; write ``valid`` (n,): initialised slots that hold a true landmark.

@@ -15,6 +15,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..kernel_types import BoolArray1, F8Array1
+
 
 @njit(cache=True)
 def _point_travel(x: float, y: float, rho: float) -> float:
@@ -58,7 +60,7 @@ def _segment_travel(ax: float, ay: float, bx: float, by: float, rho: float) -> f
 
 
 @njit(cache=True)
-def travel_distance(xs, ys, hit, rho, join):
+def travel_distance(xs: F8Array1, ys: F8Array1, hit: BoolArray1, rho: float, join: float) -> float:
     """How far (m) a disc of radius ``rho`` at the origin can move along +x before it touches a wall.
 
     ``xs``, ``ys``: the scan's end points (float64) in a frame whose x axis is the direction of travel, beam by
@@ -96,7 +98,9 @@ def travel_distance(xs, ys, hit, rho, join):
 
 
 @njit(cache=True)
-def scan_clearances(ranges, cos, sin, limit, rho, join, behind_too):
+def scan_clearances(
+    ranges: F8Array1, cos: F8Array1, sin: F8Array1, limit: float, rho: float, join: float, behind_too: bool
+) -> tuple[float, float, float]:
     """(room ahead, room behind, nearest hit range) in m for a scan of ``ranges`` along unit directions (``cos``,
     ``sin``) in the robot's frame; a beam hit a wall when its range is below ``limit``. With ``behind_too``
     False only the room ahead is measured (the others are inf)."""

@@ -172,6 +172,10 @@ class EKFSLAMEnv(gym.Env):
         self._cell_area = config.observation.memory_resolution**2
         # Constants of the step, read once here rather than through the config at every step.
         self._v_max, self._omega_max = config.robot.v_max, config.robot.omega_max
+        # mark_coverage's settings: memory resolution (m), the sensor's reach (m) and field of view (rad).
+        resolution, sensor = config.observation.memory_resolution, config.sensor
+        self._coverage_settings = (resolution, sensor.max_range, sensor.fov)
+        self._loop_gap = config.loop_gap
         self._done_variance = config.done_std**2 if config.done_std > 0 else -math.inf
         self._max_steps = config.max_episode_steps
         # Readings go through ``_correct_unknown`` when the filter associates them itself, or to drop clutter.
@@ -262,7 +266,7 @@ class EKFSLAMEnv(gym.Env):
         if self._ekf is None:
             raise gym.error.ResetNeeded("call reset() before step()")
         interface = self._interface
-        pose = self._belief[0][:3]
+        pose = self._pose_estimate
         interface.begin(action, pose)
         if self._last_action is not None:
             interface.encode(self._last_action)
@@ -389,7 +393,7 @@ class EKFSLAMEnv(gym.Env):
             landmarks = self._true_landmarks
         return StepMetrics._make(compiled.step_metrics(
             mean, cov, observed, self._world.pose_tuple, landmarks, read, self._last_seen, self._errors,
-            self._traces, self._t, self.config.loop_gap,
+            self._traces, self._t, self._loop_gap,
         ))  # fmt: skip
 
     # ------------------------------------------------------------------ hooks of a step
@@ -446,11 +450,12 @@ class EKFSLAMEnv(gym.Env):
         filter updates its arrays in place."""
         ekf = self._ekf
         self._belief = (ekf.mean, ekf.cov, ekf.observed, ekf.pose_cov_given_map)
+        self._pose_estimate = ekf.pose
         self._pose_cov = ekf.pose_cov
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        for views in ("_belief", "_pose_cov"):
+        for views in ("_belief", "_pose_estimate", "_pose_cov"):
             state[views] = None  # a pickle would copy them apart from the filter; taken anew on load
         state.pop("_read_odometry", None)  # a bound method of the world: rebound on load
         return state
@@ -464,11 +469,7 @@ class EKFSLAMEnv(gym.Env):
     def _mark_and_trail(self) -> int:
         """Update the coverage memory (and the trails when rendering); returns the cells newly covered."""
         mean = self._belief[0]
-        sensor = self.config.sensor
-        new = compiled.mark_coverage(
-            self._memory, mean, self._bounds, self.config.observation.memory_resolution, sensor.max_range,
-            sensor.fov,
-        )  # fmt: skip
+        new = compiled.mark_coverage(self._memory, mean, self._bounds, *self._coverage_settings)
         if self.render_mode is not None:
             x, y, _ = self._world.pose_tuple
             self._trail_true.append((x, y))

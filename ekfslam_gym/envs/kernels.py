@@ -13,6 +13,7 @@ from numba import njit
 
 from ..angles import compiled_wrap_angle as wrap_angle
 from ..filter.kernels import det3
+from ..kernel_types import BoolArray1, F4Array1, F8Array1, F8Array2, I8Array1
 from .observation_codes import (
     BELIEF_COVERAGE,
     BELIEF_LANDMARKS,
@@ -45,7 +46,9 @@ def _clip(value: float) -> float:
 
 
 @njit(cache=True)
-def mark_coverage(memory, pose, bounds, resolution, max_range, fov):
+def mark_coverage(
+    memory: F8Array2, pose: F8Array1, bounds: F8Array1, resolution: float, max_range: float, fov: float
+) -> int:
     """Set the memory cells whose centres lie within max_range and the field of view of ``pose``.
 
     Walls are ignored: the belief holds none, so the memory records where the sensor pointed, not what it saw.
@@ -125,8 +128,19 @@ def _window_side(offsets, part):
 
 @njit(cache=True)
 def fill_observation(
-    out, offsets, constants, mean, cov, observed, log_det, pose_given_map, scan, memory, bounds, time_left
-):
+    out: F4Array1,
+    offsets: I8Array1,
+    constants: F8Array1,
+    mean: F8Array1,
+    cov: F8Array2,
+    observed: BoolArray1,
+    log_det: float,
+    pose_given_map: F8Array2,
+    scan: F8Array1,
+    memory: F8Array2,
+    bounds: F8Array1,
+    time_left: float,
+) -> None:
     """Write the flat observation (see the module docstring) into ``out`` (float32).
 
     ``offsets`` is ``ObservationLayout.offsets`` (where each part goes), ``constants`` is
@@ -199,7 +213,15 @@ def fill_observation(
 
 
 @njit(cache=True)
-def mark_walls(walls, pose, bounds, resolution, scan, beam_angles, scan_max_range):
+def mark_walls(
+    walls: F8Array2,
+    pose: F8Array1,
+    bounds: F8Array1,
+    resolution: float,
+    scan: F8Array1,
+    beam_angles: F8Array1,
+    scan_max_range: float,
+) -> int:
     """Set the wall-memory cells holding the endpoints of the scan's beams that hit a wall (a distance below
     ``scan_max_range``), each endpoint placed from ``pose``, the pose *estimate*: the memory is the belief's
     picture of the walls, drawn where the robot believes it stands. Returns how many cells were newly marked.
@@ -260,7 +282,18 @@ def _belief_windows(out, size, coverage, walls, bounds, resolution, x, y, c, s, 
 
 
 @njit(cache=True)
-def fill_belief_image(out, size, coverage, walls, bounds, mean, cov, observed, resolution, extent):
+def fill_belief_image(
+    out: F4Array1,
+    size: int,
+    coverage: F8Array2,
+    walls: F8Array2,
+    bounds: F8Array1,
+    mean: F8Array1,
+    cov: F8Array2,
+    observed: BoolArray1,
+    resolution: float,
+    extent: float,
+) -> None:
     """Write the belief image, (3, size, size) float32 flattened C-order into ``out``, from the belief alone.
 
     The window is centred on the pose estimate mean[:3] and turned with its heading, reaching ``extent`` m to
@@ -300,8 +333,18 @@ def fill_belief_image(out, size, coverage, walls, bounds, mean, cov, observed, r
 
 @njit(cache=True)
 def step_metrics(
-    mean, cov, observed, true_pose, true_landmarks, read_ids, last_seen, errors, traces, t, loop_gap
-):
+    mean: F8Array1,
+    cov: F8Array2,
+    observed: BoolArray1,
+    true_pose: tuple[float, float, float],
+    true_landmarks: F8Array2,
+    read_ids: I8Array1,
+    last_seen: I8Array1,
+    errors: F8Array1,
+    traces: F8Array1,
+    t: int,
+    loop_gap: int,
+) -> tuple[float, float, int, float, int, float, float]:
     """Pose NEES, map RMSE of seen landmarks, new loop closures, largest landmark marginal variance, the
     number of landmarks seen, the truth gain and the belief gain.
 

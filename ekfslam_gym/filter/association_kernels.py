@@ -18,16 +18,23 @@ most pairings (ties: the smaller joint distance), pruning a null branch that can
 from __future__ import annotations
 
 import math
+from typing import TypeAlias
 
 import numpy as np
 from numba import njit
 
+from ..kernel_types import BoolArray1, F8Array1, F8Array2, I8Array1
 from .codes import BAD_INPUT, OK
-from .kernels import correct
+from .kernels import FilterArrays, FilterOptions, correct
 from .models import range_bearing, wrap_angle
 
 METHOD_NEAREST = 1
 METHOD_JCBC = 2
+
+# How ``correct_unknown`` associates: method code, gates (K,) chi2(2k, gate_prob) for k = 1..K, the new-landmark
+# threshold chi2(2, new_gate_prob), JCBC's node budget, and confirm_within (the calls a new landmark has to be
+# matched again; 0: never forgotten). ``EKFSLAM`` builds it once per ``AssociationSettings``.
+AssociationOptions: TypeAlias = "tuple[int, F8Array1, float, int, int]"
 
 
 @njit(cache=True)
@@ -83,7 +90,10 @@ def _block_s(cov, hxa, hma, la, hxb, hmb, lb):
 
 
 @njit(cache=True)
-def associate(mean, cov, observed, readings, Q, min_range, method, gates, max_nodes, slots, nearest_d2):
+def associate(
+    mean: F8Array1, cov: F8Array2, observed: BoolArray1, readings: F8Array2, Q: F8Array2, min_range: float,
+    method: int, gates: F8Array1, max_nodes: int, slots: I8Array1, nearest_d2: F8Array1,
+) -> int:  # fmt: skip
     """Associate m readings (range, bearing) with initialised landmarks.
 
     ``gates`` (K,) holds chi2(2k, gate) for k = 1..K (K >= m). Writes ``slots`` (m,): the landmark of each
@@ -271,10 +281,9 @@ def _extend(cov, Hx, Hm, zhat, pair_slot, k, j, nu_new, Q, L, y, d2_at, gates):
 
 @njit(cache=True)
 def correct_unknown(
-    mean, cov, P, observed, readings, Q, min_range, course_init, sequential, track, variant, iterations,
-    prior_pose, first, H_used, H_slots, method, gates, new_gate, max_nodes, confirm_within, tentative, slots,
-    new, forget,
-):  # fmt: skip
+    arrays: FilterArrays, options: FilterOptions, readings: F8Array2, Q: F8Array2, track: bool,
+    association: AssociationOptions, slots: I8Array1, new: BoolArray1, forget: I8Array1,
+) -> tuple[float, int, int, int]:  # fmt: skip
     """Associate (``associate``), start new landmarks, correct (``kernels.correct``) and keep the tentative
     landmarks' countdowns, in one call.
 
@@ -284,6 +293,9 @@ def correct_unknown(
     new landmark has left to be matched again; ``confirm_within`` > 0 starts it for this call's new ones.
     Returns (change of log det Sigma, status, readings used in the update, number of slots to forget).
     """
+    mean, cov, _, observed, _, _, _, _, _, tentative = arrays
+    min_range = options[3]
+    method, gates, new_gate, max_nodes, confirm_within = association
     m = readings.shape[0]
     n = observed.shape[0]
     for i in range(m):
@@ -313,10 +325,7 @@ def correct_unknown(
             chosen[a, 0] = readings[i, 0]
             chosen[a, 1] = readings[i, 1]
             a += 1
-    delta, status, used = correct(
-        mean, cov, P, observed, ids, chosen, Q, min_range, course_init, sequential, track, variant, iterations,
-        prior_pose, first, H_used, H_slots,
-    )  # fmt: skip
+    delta, status, used = correct(arrays, options, ids, chosen, Q, track)
     if status != OK:
         return delta, status, used, 0
     for i in range(m):

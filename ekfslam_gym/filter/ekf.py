@@ -193,9 +193,6 @@ class EKFSLAM:
         idx = np.arange(3, size)
         self._cov[idx, idx] = self.landmark_prior
         self._observed = np.zeros(self.n_landmarks, dtype=bool)
-        self._model_code = _MODEL_CODES[self.motion_model]
-        self._variant_code = _VARIANT_CODES[self.variant]
-        self._fej = self.variant == "fej"
         self._width = _CONTROL_WIDTH[self.motion_model]
         # First estimates: the pose as the last prediction left it, each landmark as it was initialised.
         self._prior_pose = self._mean[:3].copy()
@@ -213,7 +210,19 @@ class EKFSLAM:
         self._log_det = -np.inf
         self._tracking = False
         self._calls_since_resync = 0
+        # What the kernels take (``kernels.FilterArrays`` and ``FilterOptions``), built once.
+        self._arrays = self._kernel_arrays()
+        self._options = (
+            _MODEL_CODES[self.motion_model], self.dt, self.wheel_base, self.min_range, self.init_mode == "course",
+            self.update_mode == "sequential", _VARIANT_CODES[self.variant], int(self.iterations),
+        )  # fmt: skip
         self._start_tracking(pose_cov0)
+
+    def _kernel_arrays(self) -> tuple[np.ndarray, ...]:
+        return (
+            self._mean, self._cov, self._P, self._observed, self._prior_pose, self._first, self._G_used,
+            self._H_used, self._H_slots, self._tentative,
+        )  # fmt: skip
 
     def _start_tracking(self, pose_cov0: np.ndarray) -> None:
         """``resync()`` for the initial, block-diagonal Sigma = diag(pose prior, landmark prior I) in O(1):
@@ -330,10 +339,13 @@ class EKFSLAM:
                 raise ValueError(f"motion_cov must be (3, 3), got {noise.shape}")
             in_control_space = False
         delta, status = compiled.predict(
-            self._mean, self._cov, self._P, self._model_code, self._control, self.dt, self.wheel_base,
-            np.ascontiguousarray(noise), in_control_space, self._tracking, self._prior_pose, self._fej,
-            self._G_used,
-        )  # fmt: skip
+            self._arrays,
+            self._options,
+            self._control,
+            np.ascontiguousarray(noise),
+            in_control_space,
+            self._tracking,
+        )
         if status == codes.BAD_INPUT:
             raise ValueError(f"control and its noise must be finite, got {control!r}")
         self._after_call(delta)
@@ -354,10 +366,8 @@ class EKFSLAM:
         Q = self._noise(measurement_cov)
         self._reserve_jacobians(ids.shape[0])
         delta, status, used = compiled.correct(
-            self._mean, self._cov, self._P, self._observed, ids, np.ascontiguousarray(readings), Q,
-            self.min_range, self.init_mode == "course", self.update_mode == "sequential", self._tracking,
-            self._variant_code, self.iterations, self._prior_pose, self._first, self._H_used, self._H_slots,
-        )  # fmt: skip
+            self._arrays, self._options, ids, np.ascontiguousarray(readings), Q, self._tracking
+        )
         self._n_used = used
         if status != codes.OK:
             self._fail(status, delta, ids)
@@ -369,6 +379,7 @@ class EKFSLAM:
         if readings > self._H_slots.shape[0]:
             self._H_used = np.zeros((2 * readings, 2, 5))
             self._H_slots = np.zeros(2 * readings, dtype=np.int64)
+            self._arrays = self._kernel_arrays()
 
     def _fail(self, status: int, applied: float, ids: np.ndarray) -> None:
         """Raise for a correction's failure ``status`` after counting ``applied``, the change of log det Sigma of
@@ -417,17 +428,19 @@ class EKFSLAM:
             and readings.flags.c_contiguous
         ):
             raise TypeError("update() takes the simulator's arrays as they are; use predict() and correct()")
-        self._control[:width] = control
-        self._reserve_jacobians(ids.shape[0])
+        if width == 3:
+            kernel_control = control  # as the kernel reads it: no copy
+        else:  # (v, omega): the kernel reads three entries
+            kernel_control = self._control
+            kernel_control[:width] = control
+        if ids.shape[0] > self._H_slots.shape[0]:
+            self._reserve_jacobians(ids.shape[0])
         if not self._tracking or (self.resync_every and self._calls_since_resync + 1 >= self.resync_every):
             # a resync falls between the two (or tracking starts): the calls one at a time, as the library's
             return self.predict(control, control_cov=control_cov) + self.correct(ids, readings)
         delta, status, change, correction_status, self._n_used = compiled.predict_correct(
-            self._mean, self._cov, self._P, self._observed, self._model_code, self._control, self.dt,
-            self.wheel_base, control_cov, True, self._prior_pose, self._fej, self._G_used, ids, readings,
-            self.measurement_noise, self.min_range, self.init_mode == "course", self.update_mode == "sequential",
-            self._variant_code, self.iterations, self._first, self._H_used, self._H_slots,
-        )  # fmt: skip
+            self._arrays, self._options, kernel_control, control_cov, ids, readings, self.measurement_noise
+        )
         if status == codes.BAD_INPUT:
             raise ValueError(f"control and its noise must be finite, got {control!r}")
         # Both calls' bookkeeping (``_after_call`` twice): tracking, and no resync after the first (checked above).
@@ -450,7 +463,7 @@ class EKFSLAM:
         innovation passes the joint test); ``settings.gate_prob``: the probability of the chi-squared gates
         (2k degrees of freedom for k pairings). Changes nothing.
         """
-        code, gates, _ = self._association_settings(settings)
+        code, gates, _, max_nodes, _ = self._association_options(settings)
         readings = self._readings(readings)
         if not np.all(np.isfinite(readings)):
             raise ValueError("readings must be finite")
@@ -458,7 +471,7 @@ class EKFSLAM:
         slots = np.empty(m, dtype=np.int64)
         compiled.associate(
             self._mean, self._cov, self._observed, readings, self._noise(measurement_cov), self.min_range, code,
-            gates, association.MAX_NODES, slots, np.empty(m),
+            gates, max_nodes, slots, np.empty(m),
         )  # fmt: skip
         return slots
 
@@ -476,7 +489,7 @@ class EKFSLAM:
         state (a simple form of the provisional landmark list of Thrun, Burgard & Fox, sec. 10.3.3). Returns an
         ``UnknownCorrection`` (slots used, which were new, slots forgotten, change of log det Sigma).
         """
-        code, gates, new_threshold = self._association_settings(settings)
+        options = self._association_options(settings)
         readings = self._readings(readings)
         m = readings.shape[0]
         self._reserve_jacobians(m)
@@ -484,11 +497,8 @@ class EKFSLAM:
         new = np.empty(m, dtype=bool)
         forget = np.empty(self.n_landmarks, dtype=np.int64)
         delta, status, used, n_forget = compiled.correct_unknown(
-            self._mean, self._cov, self._P, self._observed, readings, self._noise(measurement_cov),
-            self.min_range, self.init_mode == "course", self.update_mode == "sequential", self._tracking,
-            self._variant_code, self.iterations, self._prior_pose, self._first, self._H_used, self._H_slots,
-            code, gates, new_threshold, association.MAX_NODES, settings.confirm_steps, self._tentative, slots, new,
-            forget,
+            self._arrays, self._options, readings, self._noise(measurement_cov), self._tracking, options, slots,
+            new, forget,
         )  # fmt: skip
         self._n_used = used
         if status != codes.OK:
@@ -531,16 +541,18 @@ class EKFSLAM:
         self.resync()
         return self._log_det - before
 
-    def _association_settings(self, settings: AssociationSettings) -> tuple[int, np.ndarray, float]:
-        """(method code, joint gates chi2(2k, gate_prob) for k = 1..n, new-landmark threshold
-        chi2(2, new_gate_prob)), computed once per settings object (validated when it was built)."""
+    def _association_options(self, settings: AssociationSettings) -> tuple[int, np.ndarray, float, int, int]:
+        """What the association kernels take (``association_kernels.AssociationOptions``): (method code, joint
+        gates chi2(2k, gate_prob) for k = 1..n, new-landmark threshold chi2(2, new_gate_prob), JCBC's node
+        budget, confirm_steps), computed once per settings object (validated when it was built)."""
         if not isinstance(settings, AssociationSettings):
             raise TypeError(f"settings must be an AssociationSettings, got {type(settings).__name__}")
         found = self._association_cache.get(settings)
         if found is None:
             code = association.check_method(settings.kind)
             gates = association.gate_table(settings.gate_prob, self.n_landmarks)
-            found = (code, gates, association.chi2_even_ppf(settings.new_gate_prob, 2))
+            new_threshold = association.chi2_even_ppf(settings.new_gate_prob, 2)
+            found = (code, gates, new_threshold, association.MAX_NODES, int(settings.confirm_steps))
             self._association_cache[settings] = found
         return found
 

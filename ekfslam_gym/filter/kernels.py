@@ -23,10 +23,12 @@ BAD_ID (a landmark index outside [0, n)), BAD_INPUT (a non-finite control, noise
 from __future__ import annotations
 
 import math
+from typing import TypeAlias
 
 import numpy as np
 from numba import njit
 
+from ..kernel_types import BoolArray1, F8Array1, F8Array2, F8Array3, I8Array1
 from .codes import BAD_ID, BAD_INPUT, MODEL_ODOMETRY, MODEL_WHEELS, NOT_PD, OK, VARIANT_FEJ, VARIANT_IEKF
 from .models import (
     inverse_range_bearing,
@@ -39,6 +41,17 @@ from .models import (
 
 # The iterated correction stops once a Gauss-Newton step moves no state entry by more than this (m or rad).
 ITERATION_TOLERANCE = 1e-9
+
+# The exported kernels take the filter's arrays and its fixed options as two tuples, which ``EKFSLAM`` builds
+# once, rather than as a dozen arguments each (a call costs the same: the tuples are unpacked item by item).
+# FilterArrays: mean (N,), cov (N, N), P (3, 3) (the pose covariance given the map), observed (n,), prior_pose
+# (3,) (the pose as the last prediction left it), first (n, 2) (each landmark's first estimate), G_used (3, 3),
+# H_used (>= m, 2, 5) and H_slots (>= m,) (the Jacobians last used), tentative (n,) (the calls each new
+# landmark of ``correct_unknown`` has left to be matched again).
+FilterArrays: TypeAlias = "tuple[F8Array1, F8Array2, F8Array2, BoolArray1, F8Array1, F8Array2, F8Array2, F8Array3, I8Array1, I8Array1]"
+# FilterOptions: motion model code, dt (s, velocity model), wheel base (m, wheels model), min_range (m), course
+# initialisation, sequential update, variant code, iterations (iekf).
+FilterOptions: TypeAlias = "tuple[int, float, float, float, bool, bool, int, int]"
 
 
 @njit(cache=True)
@@ -125,6 +138,20 @@ def _symmetric_3x3(a: np.ndarray) -> None:
 
 @njit(cache=True)
 def predict(
+    arrays: FilterArrays, options: FilterOptions, control: F8Array1, noise: F8Array2, noise_in_control_space: bool,
+    track: bool,
+) -> tuple[float, int]:  # fmt: skip
+    """Prediction with ``control`` and its noise (see ``_predict``)."""
+    mean, cov, P, _, prior_pose, _, G_used, _, _, _ = arrays
+    model, dt, wheel_base, _, _, _, variant, _ = options
+    return _predict(
+        mean, cov, P, model, control, dt, wheel_base, noise, noise_in_control_space, track, prior_pose,
+        variant == VARIANT_FEJ, G_used,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def _predict(
     mean, cov, P, model, control, dt, wheel_base, noise, noise_in_control_space, track, prior_pose, fej, G_used,
 ):  # fmt: skip
     """Move the pose by the motion model; update the pose rows/columns of cov and, if tracking, P.
@@ -504,6 +531,19 @@ def _undo_course_initialisation(mean, observed, first, slot, saved):
 
 @njit(cache=True)
 def correct(
+    arrays: FilterArrays, options: FilterOptions, ids: I8Array1, readings: F8Array2, Q: F8Array2, track: bool
+) -> tuple[float, int, int]:
+    """Correction with readings of known landmarks (see ``_correct``)."""
+    mean, cov, P, observed, prior_pose, first, _, H_used, H_slots, _ = arrays
+    _, _, _, min_range, course_init, sequential, variant, iterations = options
+    return _correct(
+        mean, cov, P, observed, ids, readings, Q, min_range, course_init, sequential, track, variant, iterations,
+        prior_pose, first, H_used, H_slots,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def _correct(
     mean, cov, P, observed, ids, readings, Q, min_range, course_init, sequential, track, variant, iterations,
     prior_pose, first, H_used, H_slots,
 ):  # fmt: skip
@@ -617,20 +657,15 @@ def correct(
 
 @njit(cache=True)
 def predict_correct(
-    mean, cov, P, observed, model, control, dt, wheel_base, control_cov, track, prior_pose, fej, G_used, ids,
-    readings, Q, min_range, course_init, sequential, variant, iterations, first, H_used, H_slots,
-):  # fmt: skip
-    """``predict`` with noise in control space, then ``correct``, in one call: the env's every step, where a
-    call's arguments cost more than a small prediction. Returns (prediction's change of log det, its status,
-    correction's change, its status, readings used); the correction is skipped unless the prediction is OK.
-    ``track`` applies to both, so the caller must not need a resync between them."""
-    predicted, status = predict(
-        mean, cov, P, model, control, dt, wheel_base, control_cov, True, track, prior_pose, fej, G_used
-    )
+    arrays: FilterArrays, options: FilterOptions, control: F8Array1, control_cov: F8Array2, ids: I8Array1,
+    readings: F8Array2, Q: F8Array2,
+) -> tuple[float, int, float, int, int]:  # fmt: skip
+    """``predict`` with noise in control space, then ``correct``, both tracking the log det, in one call: the
+    env's every step, where a call's arguments cost more than a small prediction. Returns (prediction's change
+    of log det, its status, correction's change, its status, readings used); the correction is skipped unless
+    the prediction is OK. The caller must not need a resync between them."""
+    predicted, status = predict(arrays, options, control, control_cov, True, True)
     if status != OK:
         return predicted, status, 0.0, OK, 0
-    corrected, corrected_status, used = correct(
-        mean, cov, P, observed, ids, readings, Q, min_range, course_init, sequential, track, variant, iterations,
-        prior_pose, first, H_used, H_slots,
-    )  # fmt: skip
+    corrected, corrected_status, used = correct(arrays, options, ids, readings, Q, True)
     return predicted, status, corrected, corrected_status, used

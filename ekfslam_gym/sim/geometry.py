@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from ..angles import compiled_wrap_angle as wrap_angle
+from ..kernel_types import BoolArray2, F8Array1, F8Array2, I8Array1
 
 TWO_PI = 2.0 * math.pi
 
@@ -63,7 +64,7 @@ def _segment_segment_dist2(
 
 
 @njit(cache=True)
-def min_wall_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
+def min_wall_distance(points: F8Array2, walls: F8Array2) -> F8Array1:
     """Distance (m) from each point (N, 2) to the nearest wall centre line; +inf if there are no walls."""
     out = np.full(points.shape[0], np.inf)
     for i in range(points.shape[0]):
@@ -109,14 +110,14 @@ def visible_landmarks(
     x: float,
     y: float,
     theta: float,
-    landmarks: np.ndarray,
-    walls: np.ndarray,
+    landmarks: F8Array2,
+    walls: F8Array2,
     wall_radius: float,
     min_range: float,
     max_range: float,
     half_fov: float,
-    ids_out: np.ndarray,
-    z_out: np.ndarray,
+    ids_out: I8Array1,
+    z_out: F8Array2,
 ) -> int:
     """Noise-free readings of the landmarks a sensor at pose (x, y, theta) sees; returns their count m.
 
@@ -155,7 +156,7 @@ def visible_landmarks(
 
 
 @njit(cache=True)
-def add_reading_noise(z: np.ndarray, noise: np.ndarray, range_std: float, bearing_std: float) -> None:
+def add_reading_noise(z: F8Array2, noise: F8Array2, range_std: float, bearing_std: float) -> None:
     """In place: z += (range_std, bearing_std) * noise, bearings re-wrapped to (-pi, pi]."""
     for i in range(z.shape[0]):
         z[i, 0] += range_std * noise[i, 0]
@@ -212,11 +213,11 @@ def cast_rays(
     x: float,
     y: float,
     theta: float,
-    beam_angles: np.ndarray,
-    walls: np.ndarray,
+    beam_angles: F8Array1,
+    walls: F8Array2,
     wall_radius: float,
     max_range: float,
-    out: np.ndarray,
+    out: F8Array1,
 ) -> None:
     """Distance (m) from (x, y) along each beam (angle rad relative to theta) to the first wall surface.
 
@@ -236,7 +237,7 @@ def cast_rays(
 
 
 @njit(cache=True)
-def accept_spaced(candidates: np.ndarray, accepted: np.ndarray, count: int, spacing2: float) -> int:
+def accept_spaced(candidates: F8Array2, accepted: F8Array2, count: int, spacing2: float) -> int:
     """Greedily append candidates at least sqrt(spacing2) m from every accepted point, in order, until
     ``accepted`` is full; returns the new count."""
     for i in range(candidates.shape[0]):
@@ -257,7 +258,7 @@ def accept_spaced(candidates: np.ndarray, accepted: np.ndarray, count: int, spac
 
 
 @njit(cache=True)
-def connected_component(free: np.ndarray, row: int, col: int) -> np.ndarray:
+def connected_component(free: BoolArray2, row: int, col: int) -> BoolArray2:
     """The cells of the boolean grid ``free`` 4-connected to (row, col) (which must be free), by flood fill."""
     rows, cols = free.shape
     component = np.zeros((rows, cols), dtype=np.bool_)
@@ -279,3 +280,31 @@ def connected_component(free: np.ndarray, row: int, col: int) -> np.ndarray:
                 stack[top, 1] = nc
                 top += 1
     return component
+
+
+@njit(cache=True)
+def free_cells(
+    walls: F8Array2, x0: float, y0: float, cell: float, rows: int, cols: int, clearance: float
+) -> BoolArray2:
+    """The grid (rows, cols) of cells whose centres (x0 + (col + 0.5) cell, y0 + (row + 0.5) cell) lie at least
+    ``clearance`` m from every wall centre line: ``min_wall_distance(centres, walls) >= clearance``, cell for
+    cell, but visiting only the cells near each wall (a layout's free-space grid in ~0.1 ms, not ~50 ms)."""
+    free = np.ones((rows, cols), dtype=np.bool_)
+    for j in range(walls.shape[0]):
+        ax = walls[j, 0]
+        ay = walls[j, 1]
+        bx = walls[j, 2]
+        by = walls[j, 3]
+        # every centre within ``clearance`` of the segment lies in its bounding box grown by ``clearance``
+        c0 = max(0, int(math.floor((min(ax, bx) - clearance - x0) / cell - 0.5)) - 1)
+        c1 = min(cols - 1, int(math.ceil((max(ax, bx) + clearance - x0) / cell - 0.5)) + 1)
+        r0 = max(0, int(math.floor((min(ay, by) - clearance - y0) / cell - 0.5)) - 1)
+        r1 = min(rows - 1, int(math.ceil((max(ay, by) + clearance - y0) / cell - 0.5)) + 1)
+        for r in range(r0, r1 + 1):
+            py = y0 + (r + 0.5) * cell
+            for c in range(c0, c1 + 1):
+                if free[r, c]:
+                    px = x0 + (c + 0.5) * cell
+                    if math.sqrt(_point_segment_dist2(px, py, ax, ay, bx, by)) < clearance:
+                        free[r, c] = False
+    return free

@@ -6,9 +6,9 @@ values are those of ``odometry_kernels.sensed_wheel_reading`` followed by ``geom
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
+from ..kernel_types import F8Array1, F8Array2
 from .geometry import add_reading_noise
 from .odometry_kernels import sensed_wheel_reading
 
@@ -23,12 +23,12 @@ def measure_step(
     theta1: float,
     wheel_base: float,
     contact_travel: float,
-    params: np.ndarray,
-    normals: np.ndarray,
-    u: np.ndarray,
-    cov: np.ndarray,
-    u_true: np.ndarray,
-    z: np.ndarray,
+    params: F8Array1,
+    normals: F8Array1,
+    u: F8Array1,
+    cov: F8Array2,
+    u_true: F8Array1,
+    z: F8Array2,
     range_std: float,
     bearing_std: float,
 ) -> None:

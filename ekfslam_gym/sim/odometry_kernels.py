@@ -11,6 +11,7 @@ import numpy as np
 from numba import njit
 
 from ..angles import compiled_wrap_angle as wrap_angle
+from ..kernel_types import F8Array1, F8Array2
 
 HALF_PI = 0.5 * math.pi
 
@@ -65,11 +66,11 @@ def odometry_reading(
     x1: float,
     y1: float,
     theta1: float,
-    alphas: np.ndarray,
-    normals: np.ndarray,
-    u: np.ndarray,
-    cov: np.ndarray,
-    u_true: np.ndarray,
+    alphas: F8Array1,
+    normals: F8Array1,
+    u: F8Array1,
+    cov: F8Array2,
+    u_true: F8Array1,
 ) -> None:
     """Write u (the exact decomposition plus std * normals), M = diag(std^2) into ``cov`` (zeros off the
     diagonal are the caller's) and the exact decomposition into ``u_true``: the caller allocates, because
@@ -123,11 +124,11 @@ def velocity_reading(
     y1: float,
     theta1: float,
     dt: float,
-    alphas: np.ndarray,
-    normals: np.ndarray,
-    u: np.ndarray,
-    cov: np.ndarray,
-    u_true: np.ndarray,
+    alphas: F8Array1,
+    normals: F8Array1,
+    u: F8Array1,
+    cov: F8Array2,
+    u_true: F8Array1,
 ) -> None:
     """The velocity form of ``odometry_reading``: the arc's (v, omega) plus std * normals, N = diag(std^2)."""
     u_true[0], u_true[1] = velocity_from_motion(x0, y0, theta0, x1, y1, theta1, dt)
@@ -180,14 +181,14 @@ def wheel_std(
 
 @njit(cache=True)
 def wheel_reading(
-    trace: np.ndarray,
+    trace: F8Array2,
     wheel_base: float,
     contact_travel: float,
-    params: np.ndarray,
-    normals: np.ndarray,
-    u: np.ndarray,
-    cov: np.ndarray,
-    u_true: np.ndarray,
+    params: F8Array1,
+    normals: F8Array1,
+    u: F8Array1,
+    cov: F8Array2,
+    u_true: F8Array1,
 ) -> None:
     """Wheel odometry over one step whose poses after each substep are ``trace`` (S+1, 3), the step's start
     pose first, written into ``u``, ``cov`` (M = diag(std^2); zeros off the diagonal are the caller's) and

@@ -1,5 +1,6 @@
-"""The greedy planner's wall veto: the wall scan as points and joined segments in the robot frame, and the
-clearance of a primitive's path from them (the planner never uses the walls' true geometry)."""
+"""The wall veto of a motion primitive: the wall scan as points and joined segments in the robot frame, the arc a
+primitive drives, and its clearance from them (the planners never use the walls' true geometry). Poses relative
+to a robot are (forward, left, heading change), m and rad."""
 
 from __future__ import annotations
 
@@ -10,8 +11,25 @@ import numpy as np
 WALL_JOIN = 1.5  # m: neighbouring scan end points closer than this are taken to lie on one surface
 
 
+def arc_poses(v: float, omega: float, dt: float, steps: int) -> np.ndarray:
+    """The poses (steps + 1, 3) relative to the start that ``v`` (m/s) and ``omega`` (rad/s) held for ``steps``
+    steps of ``dt`` s reach in free space: each step a chord v dt sinc(omega dt / 2) at the mid-step heading."""
+    half = 0.5 * omega * dt
+    chord = v * dt * (math.sin(half) / half if abs(half) > 1e-9 else 1.0)
+    poses = np.zeros((steps + 1, 3))
+    for k in range(steps):
+        x, y, theta = poses[k]
+        poses[k + 1] = (
+            x + chord * math.cos(theta + half),
+            y + chord * math.sin(theta + half),
+            theta + 2 * half,
+        )
+    return poses
+
+
 def scan_geometry(scan: np.ndarray, angles: np.ndarray, scan_max: float) -> tuple[np.ndarray, np.ndarray]:
-    """Wall points (m, 2) and segments (s, 4) in the robot frame from the scan (m per beam at ``angles``)."""
+    """Wall points (m, 2) and segments (s, 4) in the robot frame from the scan (m per beam at ``angles``; a range
+    at or beyond ``scan_max`` hit nothing)."""
     hit = scan < scan_max - 1e-6
     points = np.column_stack([scan * np.cos(angles), scan * np.sin(angles)])
     nxt = np.roll(np.arange(scan.size), -1)
