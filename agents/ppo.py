@@ -83,8 +83,6 @@ def load_vecnormalize(path: str | Path) -> Any:
 
 # policy_kwargs entries that name a class or function, resolved from a dotted name (``resolve_policy_kwargs``).
 CLASS_KWARGS = ("features_extractor_class", "activation_fn", "optimizer_class")
-# Records written before the agents moved under the package (0.2.0) name their classes ``agents.<module>.<Class>``.
-LEGACY_PREFIX = "agents."
 
 
 def import_dotted(name: str) -> Any:
@@ -121,13 +119,7 @@ def load_model(path: str | Path, *, device: str = "cpu", algo: str | None = None
     recorded = record.policy_kwargs if record is not None else None
     custom: dict[str, Any] = {}
     if recorded is not None:
-        named = {
-            key: f"ekfslam_gym.{value}"
-            if isinstance(value, str) and value.startswith(LEGACY_PREFIX)
-            else value
-            for key, value in recorded.items()
-        }
-        custom["policy_kwargs"] = resolve_policy_kwargs(named)
+        custom["policy_kwargs"] = resolve_policy_kwargs(recorded)
     return algo_class(algo or saved_algo(zip_path, record)).load(
         zip_path, device=device, custom_objects=custom or None
     )

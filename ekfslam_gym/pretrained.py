@@ -20,11 +20,15 @@ Needs the ``train`` extra (stable-baselines3, torch).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import warnings
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from .packaged import shipped_model
+
+DEFAULT_ENV_ID = "EKFSLAM-v0"
+"""The env of agents that name none (no training record)."""
 
 
 def load_pretrained(env_id: str = "EKFSLAM-v0", **agent_kwargs: Any) -> Any:
@@ -70,3 +74,24 @@ def make_env_for_model(
         venv.training = False
         venv.norm_reward = False
     return venv
+
+
+def resolve_env_id(agents: Sequence[Any], env_id: str | None = None, force: bool = False) -> str:
+    """The env to run ``agents`` on: ``env_id`` when given, else the one their training records name
+    (``trained_env_id``; one for all), else ``DEFAULT_ENV_ID``. ValueError when agents were trained on different
+    envs and none is given, or when ``env_id`` is not the one an agent was trained on and not ``force``d (then a
+    warning says so)."""
+    trained = {a: str(a.trained_env_id) for a in agents if getattr(a, "trained_env_id", None)}
+    if env_id is None:
+        ids = sorted({t.split(":")[-1] for t in trained.values()})
+        if len(ids) > 1:
+            raise ValueError(f"the models were trained on different envs ({', '.join(ids)}); give --env-id "
+                             "(and --force to run them off their own)")  # fmt: skip
+        return ids[0] if ids else DEFAULT_ENV_ID
+    for agent, trained_id in trained.items():
+        if trained_id.split(":")[-1] != env_id.split(":")[-1]:
+            if not force:
+                raise ValueError(f"{agent!r} was trained on {trained_id}, not {env_id}: leave out --env-id to "
+                                 f"evaluate it on {trained_id}, or add --force")  # fmt: skip
+            warnings.warn(f"{agent!r} was trained on {trained_id}, evaluated on {env_id}", stacklevel=2)
+    return env_id

@@ -16,7 +16,7 @@ from ekfslam_gym.data.mrclam import (
     read_odometry,
 )
 from ekfslam_gym.evaluation.alignment import align_se2
-from ekfslam_gym.evaluation.mrclam import ReplaySettings, build_drive, landmark_errors, replay_drive
+from ekfslam_gym.replay.mrclam import ReplaySettings, build_drive, landmark_errors, replay_drive
 from tests.datapaths import mrclam_dir
 
 # Excerpts in the data set's own layout (tab-separated, '#' headers); _folder adds the trailing blank its lines have.
@@ -190,8 +190,8 @@ def test_filter_map_meets_the_textbook_ekf():
 
 def test_group_innovations_match_the_consistency_nis():
     from ekfslam_gym.evaluation.consistency import innovation_nis
-    from ekfslam_gym.evaluation.innovations import group_innovations
     from ekfslam_gym.filter import EKFSLAM
+    from ekfslam_gym.replay.innovations import group_innovations
 
     ekf = EKFSLAM(
         3, motion_model="velocity", dt=1.0, measurement_noise=np.diag([0.01, 0.001]), pose_prior=1e-10
@@ -243,8 +243,8 @@ def test_replay_cli_refuses_options_that_do_not_apply(tmp_path, capsys, argv, me
 
 def test_chain_replay_without_readings_composes_the_odometry(tmp_path):
     from ekfslam_gym.data.gtsam2d import read_gtsam2d
-    from ekfslam_gym.evaluation.chain_replay import replay_chain
     from ekfslam_gym.graph.se2 import compose
+    from ekfslam_gym.replay.chain import replay_chain
 
     steps = [(1.0, 0.2, 0.3), (0.5, -0.1, -0.8), (0.0, 0.0, 0.4), (2.0, 0.0, 0.0)]
     lines = [
@@ -269,7 +269,7 @@ def test_chain_replay_without_readings_composes_the_odometry(tmp_path):
 
 
 def test_noise_fit_does_not_lose_likelihood(tmp_path):
-    from ekfslam_gym.evaluation.calibration import fit_noise, with_parameters
+    from ekfslam_gym.replay.calibration import fit_noise, with_parameters
 
     folder = _folder(
         tmp_path, **{"Robot1_Measurement.dat": MEASUREMENTS + "1248272274.500 \t  72 \t  2.0 \t  0.1\n"}
@@ -303,8 +303,8 @@ def test_mrclam_preset_builds_and_steps():
 
 
 def test_anchoring_puts_the_first_pose_at_the_origin():
-    from ekfslam_gym.evaluation.chain_replay import anchored_at_first_pose
     from ekfslam_gym.graph.se2 import between
+    from ekfslam_gym.replay.chain import anchored_at_first_pose
 
     poses = np.array([[3.0, -2.0, 0.7], [4.0, -1.0, 1.2], [2.0, 5.0, -2.5]])
     moved = anchored_at_first_pose(poses).poses(poses)

@@ -10,7 +10,7 @@ import pytest
 from ekfslam_gym.cli.replay import main
 from ekfslam_gym.data.course import read_sensor_data, read_world
 from ekfslam_gym.data.synthetic import simulate_drive
-from ekfslam_gym.evaluation.replay import replay
+from ekfslam_gym.replay.course import final_frame, map_errors, map_rmse, replay
 from tests.datapaths import freiburg_dir
 
 
@@ -144,9 +144,12 @@ def test_gif_has_frames(tmp_path, capsys):
 def test_replay_function_matches_the_cli(capsys):
     drive = simulate_drive(0)
     result = replay(drive.data, world=drive.world, steps=60, true_poses=drive.poses, frame_every=20)
-    assert [f.step for f in result.frames] == [20, 40, 60]
+    assert [f.step for f in result.extras["frames"]] == [20, 40, 60]
     assert run_json(capsys, "--steps", 60)["pose"] == [float(v) for v in result.ekf.pose]
-    assert result.map_rmse() is not None and set(result.map_errors()) == set(result.landmark_estimates())
+    assert map_rmse(result, drive.world) is not None
+    assert set(map_errors(result, drive.world)) == set(result.landmark_estimates())
+    np.testing.assert_array_equal(result.poses[-1], result.ekf.pose)
+    assert result.steps == 60 and result.seconds > 0
 
 
 # ------------------------------------------------------------------------------------------------- errors
@@ -208,7 +211,7 @@ def test_pictures_leave_pyplot_alone(tmp_path):
     had_pyplot = "matplotlib.pyplot" in sys.modules
     drive = simulate_drive(1)
     result = replay(drive.data, world=drive.world, steps=30, true_poses=drive.poses)
-    plotting.save_png(tmp_path / "a.png", result.frame(), drive.world)
+    plotting.save_png(tmp_path / "a.png", final_frame(result), drive.world)
     assert ("matplotlib.pyplot" in sys.modules) == had_pyplot  # drawn on a bare Figure, no global state
     assert (tmp_path / "a.png").stat().st_size > 10_000
 

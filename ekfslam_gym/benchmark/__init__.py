@@ -18,7 +18,6 @@ from typing import Any
 from ..evaluation.aggregate import summary
 from ..evaluation.episode_metrics import METRIC_KEYS
 from ..evaluation.report import format_value, json_safe
-from ..evaluation.rollout import evaluate_agent
 from ..seeds import HELD_OUT_SEEDS, span
 
 QUICK_EPISODES = 5
@@ -63,7 +62,9 @@ def run(
     protocol seeds; the report: ``{"agent", "quick", "seeds", "package", "results": {env_id: {"summary",
     "reference", "reproduces"}}}`` (``reproduces``: for an agent with a reference row of its own name, whether
     each shared metric prints as that row does, IQM and CI ends, at the table's precision)."""
+    # the episode loop here, not at import: its imports would slow ekfslam-benchmark --help
     from .. import __version__
+    from ..evaluation.rollout import evaluate_agent
 
     seeds = protocol_seeds(quick)
     results: dict[str, Any] = {}

@@ -1,7 +1,7 @@
 """Solve a pose graph from the command line.
 
-    python -m ekfslam_gym.graph FILE [--solver gn|lm] [--settings auto|course|gtsam] [--json] [--plot FILE.png]
-                                     [--backend NAME]
+    ekfslam-graph FILE [--solver gn|lm] [--settings auto|course|gtsam] [--json] [--plot FILE.png]
+                          [--backend NAME]
 
 FILE is a course MAT graph (``.dat``), a 2-D g2o file (``.g2o``) or a GTSAM 2-D dataset (``.txt``/``.graph``,
 e.g. Victoria Park). ``--settings gtsam`` optimises as GTSAM does (its Pose2 retraction, and for LM its λ
@@ -18,9 +18,6 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..data.graph_files import GTSAM_SUFFIXES, read_graph
-from ..evaluation.plotting import plot_graph_solution
-from ..graph.optimizer import GTSAM_LM, optimize
 from ..graph.sparse_solve import BACKENDS
 from .common import command_line, command_parser
 
@@ -45,6 +42,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print one JSON object with the figures")
     parser.add_argument("--plot", type=Path, metavar="FILE.png", help="save a plot of the solution")
     args = parser.parse_args(argv)
+    from ..data.graph_files import GTSAM_SUFFIXES, read_graph
+    from ..graph.optimizer import GTSAM_LM, optimize
 
     try:
         problem = read_graph(args.file)
@@ -87,9 +86,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{status} after {result.iterations} iterations in {result.seconds:.3f} s ({settings} settings)"
         )
     if args.plot is not None:
+        from ..evaluation.plotting import plot_graph_solution
+
         plot_graph_solution(args.plot, problem.initial, result, title=args.file.name)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    raise SystemExit(main())

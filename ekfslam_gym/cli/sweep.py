@@ -2,8 +2,8 @@
 
 Usage::
 
-    python -m ekfslam_gym.sweep --env-ids EKFSLAM-v0 --seeds 0-4 --timesteps 200000 --out runs/sweep
-    python -m ekfslam_gym.sweep --env-ids EKFSLAM-v0,EKFSLAM-Loop-v0 --seeds 0-2 --address auto --json
+    ekfslam-sweep --env-ids EKFSLAM-v0 --seeds 0-4 --timesteps 200000 --out runs/sweep
+    ekfslam-sweep --env-ids EKFSLAM-v0,EKFSLAM-Loop-v0 --seeds 0-2 --address auto --json
 
 Each (env id, seed) trains as ``python train.py --config CONFIG --env-id ID --seed S`` would (into
 ``OUT/<env-id>_seed<S>/``) and its final model is evaluated on ``--eval-seeds`` (default the evaluation seeds

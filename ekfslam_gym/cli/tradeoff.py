@@ -1,7 +1,7 @@
 """Plot two metrics against each other for many models at once, and list the ones no other model beats on both
 (see ``ekfslam_gym.evaluation.tradeoff``).
 
-python -m ekfslam_gym.tradeoff runs/a.json runs/b.json --label "PPO seeds" --label planners --plot out.png
+ekfslam-tradeoff runs/a.json runs/b.json --label "PPO seeds" --label planners --plot out.png
 
 Each FILE is either the per-episode metrics that ``evaluate --episodes-json`` writes ({name: [episodes]}), one
 group of points named by its --label (in order) or by the file's stem, or a CSV of points this command wrote

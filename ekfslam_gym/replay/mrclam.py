@@ -13,6 +13,7 @@ NIS, and its map by the landmark errors after the best SE(2) alignment to the su
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -20,23 +21,18 @@ import numpy as np
 
 from ..data.mrclam import MRCLAMRun
 from ..envs.association_truth import tally_associations
-from ..filter import EKFSLAM
-from ..filter.settings import (
-    CONFIRM_STEPS,
-    GATE_PROB,
-    KNOWN_START_POSE_PRIOR,
-    NEW_GATE_PROB,
-    AssociationSettings,
-)
-from .alignment import SE2Transform, align_se2
+from ..evaluation.alignment import SE2Transform, align_se2
+from ..filter import EKFSLAM, AssociationSettings, FilterSettings
+from ..filter.settings import KNOWN_START_POSE_PRIOR
 from .innovations import group_innovations
+from .result import Replay
 
 __all__ = [
     "FITTED_MRCLAM",
+    "MRCLAM_FILTER",
     "Drive",
     "IncrementNoise",
     "ReplaySettings",
-    "RealReplay",
     "build_drive",
     "landmark_errors",
     "replay_drive",
@@ -153,26 +149,58 @@ def _merged(drive: Drive, span: float) -> Drive:
     return Drive(drive.time[ends], increments, drive.offsets[ends], drive.z, drive.subject)
 
 
+# The filter of a real drive: the velocity model on the drive's increments (run with dt = 1 s, see the module
+# docstring), inverse initialisation, landmarks at the env's prior, the start known (the drive's frame is its own).
+MRCLAM_FILTER = FilterSettings(
+    motion_model="velocity", init_mode="inverse", pose_prior=KNOWN_START_POSE_PRIOR
+)
+
+
 @dataclass(frozen=True)
 class ReplaySettings:
-    """How the filter runs: its variant (``ekf``, ``fej``, ``iekf``), association (``known`` by barcode, or
-    ``nearest`` / ``jcbc`` with the barcodes hidden), reading noise (m, rad), odometry noise, landmark
-    initialisation and prior (m^2), and for unknown association the gates and the landmark slots to hold.
+    """How a real drive is replayed: the filter (``FilterSettings``: its variant, initialisation and priors;
+    the velocity model), the association (``AssociationSettings``: ``known`` by barcode, or ``nearest`` /
+    ``jcbc`` with the barcodes hidden, their gates), the reading noise (m, rad), the odometry noise, and the
+    landmark slots an unknown association holds.
 
-    The default reading noise is the textbook EKF's the issue compares with (range 0.15 m, bearing 0.08 rad);
-    ``FITTED_MRCLAM`` holds the noise fitted to MRCLAM robot 1."""
+    The default reading noise is the textbook EKF's (range 0.15 m, bearing 0.08 rad); ``FITTED_MRCLAM`` holds
+    the noise fitted to MRCLAM robot 1."""
 
-    variant: str = "ekf"
-    association: str = "known"
+    filter: FilterSettings = MRCLAM_FILTER
+    association: AssociationSettings = AssociationSettings()
     range_std: float = 0.15
     bearing_std: float = 0.08
     odometry: IncrementNoise = field(default_factory=IncrementNoise)
-    init_mode: str = "inverse"
-    landmark_prior: float = 100.0
-    gate_prob: float = GATE_PROB
-    new_gate_prob: float = NEW_GATE_PROB
-    confirm_steps: int = CONFIRM_STEPS
     slots: int = 60
+
+    def __post_init__(self) -> None:
+        if self.filter.motion_model != "velocity":
+            raise ValueError(
+                f"a real drive replays through the velocity model, got {self.filter.motion_model!r}"
+            )
+        for name in ("range_std", "bearing_std"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"ReplaySettings.{name} must be > 0, got {value!r}")
+        if isinstance(self.slots, bool) or not isinstance(self.slots, (int, np.integer)) or self.slots < 1:
+            raise ValueError(f"ReplaySettings.slots must be an integer >= 1, got {self.slots!r}")
+
+    @property
+    def measurement_cov(self) -> np.ndarray:
+        """The (range, bearing) covariance of every reading."""
+        return np.diag([self.range_std**2, self.bearing_std**2])
+
+    def choosing(self, *, variant: str | None = None, association: str | None = None) -> ReplaySettings:
+        """These settings with the filter variant and the association kind replaced (None keeps them)."""
+        filter_settings = (
+            self.filter if variant is None else dataclasses.replace(self.filter, variant=variant)
+        )
+        kind = (
+            self.association
+            if association is None
+            else dataclasses.replace(self.association, kind=association)
+        )
+        return dataclasses.replace(self, filter=filter_settings, association=kind)
 
 
 # The noise of MRCLAM robot 1 fitted by maximum likelihood of the filter's innovations (``calibration.fit_noise``
@@ -182,63 +210,40 @@ FITTED_MRCLAM = ReplaySettings(
 )
 
 
-@dataclass(eq=False)  # holds arrays
-class RealReplay:
-    """A replayed drive: the filter at the end, its path, and the innovation statistics.
+class _Innovations:
+    """The re-observations' NIS, their times and the joint log-likelihood, gathered step by step."""
 
-    poses (K+1, 3): the estimate after each step. labels (n,): the subject each slot holds (-1: none; with
-    known association the landmarks' subjects). nis (R,) and nis_time (R,): each re-observation's NIS (2 dof)
-    before its correction and its time. log_likelihood: sum over steps of log N(innovation; 0, S) of the
-    re-observations jointly. seconds: the filter's own time (predictions and corrections, nothing else).
-    false / missed: associations against the barcodes (unknown association only).
-    """
+    def __init__(self, measurement_cov: np.ndarray, min_range: float) -> None:
+        self.Q, self.min_range = measurement_cov, min_range
+        self.nis: list[np.ndarray] = []
+        self.times: list[np.ndarray] = []
+        self.log_likelihood = 0.0
 
-    ekf: EKFSLAM
-    drive: Drive
-    settings: ReplaySettings
-    poses: np.ndarray
-    labels: np.ndarray
-    nis: np.ndarray
-    nis_time: np.ndarray
-    log_likelihood: float
-    seconds: float
-    false: int = 0
-    missed: int = 0
-    new: int = 0
+    def add(self, mean: np.ndarray, cov: np.ndarray, slots: np.ndarray, z: np.ndarray, time: float) -> None:
+        """The readings ``z`` of the initialised ``slots``, from the state (mean, cov) before their correction."""
+        if len(slots):
+            nis, log_like = group_innovations(mean, cov, slots, z, self.Q, self.min_range)
+            self.nis.append(nis)
+            self.times.append(np.full(len(nis), time))
+            self.log_likelihood += log_like
 
-    def landmark_estimates(self) -> dict[int, np.ndarray]:
-        """``{subject: (x, y)}`` of the slots that hold a landmark; with two slots for one subject, the one
-        initialised first (lower slot)."""
-        out: dict[int, np.ndarray] = {}
-        for slot in np.flatnonzero(self.ekf.observed):
-            subject = int(self.labels[slot])
-            if subject > 0 and subject not in out:
-                out[subject] = self.ekf.landmarks[slot].copy()
-        return out
-
-    @property
-    def steps_per_second(self) -> float:
-        return len(self.drive) / self.seconds if self.seconds > 0 else float("inf")
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        return (
+            np.concatenate(self.nis) if self.nis else np.zeros(0),
+            np.concatenate(self.times) if self.times else np.zeros(0),
+        )
 
 
-def replay_drive(
-    drive: Drive, landmark_ids: np.ndarray, settings: ReplaySettings | None = None
-) -> RealReplay:
+def replay_drive(drive: Drive, landmark_ids: np.ndarray, settings: ReplaySettings | None = None) -> Replay:
     """Run EKF-SLAM over ``drive`` from the origin; ``landmark_ids`` (n,) are the landmark subjects, the slots
-    of known association (readings of other subjects are then skipped)."""
+    of known association (readings of other subjects are then skipped). The result's labels are the subject
+    each slot holds (-1: none), ``nis_at`` each re-observation's time (s)."""
     settings = ReplaySettings() if settings is None else settings
-    known = settings.association == "known"
+    known = settings.association.kind == "known"
     landmark_ids = np.asarray(landmark_ids, dtype=np.int64)
     n_slots = len(landmark_ids) if known else settings.slots
-    Q = np.diag([settings.range_std**2, settings.bearing_std**2])
-    association = AssociationSettings(
-        settings.association, settings.gate_prob, settings.new_gate_prob, settings.confirm_steps
-    )
-    ekf = EKFSLAM(
-        n_slots, motion_model="velocity", dt=1.0, variant=settings.variant, measurement_noise=Q,
-        landmark_prior=settings.landmark_prior, pose_prior=KNOWN_START_POSE_PRIOR, init_mode=settings.init_mode,
-        initial_pose=np.zeros(3),
-    )  # fmt: skip
+    Q = settings.measurement_cov
+    ekf = EKFSLAM(n_slots, settings.filter, dt=1.0, measurement_noise=Q, initial_pose=np.zeros(3))
     slot_of = np.full(int(max(landmark_ids.max(initial=0), drive.subject.max(initial=0))) + 1, -1, np.int64)
     slot_of[landmark_ids] = np.arange(len(landmark_ids))
     variances = settings.odometry.variances(drive.increments, drive.dt)
@@ -256,9 +261,7 @@ def replay_drive(
 
     poses = np.empty((len(drive) + 1, 3))
     poses[0] = ekf.pose
-    nis_values: list[np.ndarray] = []
-    nis_times: list[np.ndarray] = []
-    log_likelihood = 0.0
+    innovations = _Innovations(Q, ekf.min_range)
     seconds = 0.0
     for k in range(len(drive)):
         tic = time.perf_counter()
@@ -273,29 +276,17 @@ def replay_drive(
                 keep = slots >= 0
                 slots, z = slots[keep], z[keep]
                 seen = ekf.observed[slots]
-                if np.any(seen):
-                    nis, log_like = group_innovations(
-                        ekf.mean, ekf.cov, slots[seen], z[seen], Q, ekf.min_range
-                    )
-                    nis_values.append(nis)
-                    nis_times.append(np.full(len(nis), drive.time[k + 1]))
-                    log_likelihood += log_like
+                innovations.add(ekf.mean, ekf.cov, slots[seen], z[seen], drive.time[k + 1])
                 tic = time.perf_counter()
                 ekf.correct(slots, z)
                 seconds += time.perf_counter() - tic
             else:
                 mean, cov = ekf.mean.copy(), ekf.cov.copy()
                 tic = time.perf_counter()
-                result = ekf.correct_unknown(z, association)
+                result = ekf.correct_unknown(z, settings.association)
                 seconds += time.perf_counter() - tic
                 matched = (result.slots >= 0) & ~result.new
-                if np.any(matched):
-                    nis, log_like = group_innovations(
-                        mean, cov, result.slots[matched], z[matched], Q, ekf.min_range
-                    )
-                    nis_values.append(nis)
-                    nis_times.append(np.full(len(nis), drive.time[k + 1]))
-                    log_likelihood += log_like
+                innovations.add(mean, cov, result.slots[matched], z[matched], drive.time[k + 1])
                 f, m, _, _ = tally_associations(
                     slot_of[subject], z, result.slots, result.new, result.forgotten, ekf.observed,
                     slot_truth, dummy_truth, slot_landmarks, valid,
@@ -306,11 +297,9 @@ def replay_drive(
         poses[k + 1] = ekf.pose
     if not known:
         labels = np.where(slot_truth >= 0, landmark_ids[np.maximum(slot_truth, 0)], -1)
-    return RealReplay(
-        ekf, drive, settings, poses, labels,
-        np.concatenate(nis_values) if nis_values else np.zeros(0),
-        np.concatenate(nis_times) if nis_times else np.zeros(0),
-        log_likelihood, seconds, false, missed, new_count,
+    nis, nis_time = innovations.arrays()
+    return Replay(
+        ekf, poses, labels, nis, nis_time, innovations.log_likelihood, seconds, false, missed, new_count,
     )  # fmt: skip
 
 

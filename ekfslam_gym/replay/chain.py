@@ -11,48 +11,41 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..data.gtsam2d import Gtsam2dDataset
-from ..filter import EKFSLAM
+from ..evaluation.alignment import SE2Transform
+from ..filter import EKFSLAM, FilterSettings
 from ..filter.settings import KNOWN_START_POSE_PRIOR
-from .alignment import SE2Transform
 from .innovations import group_innovations
+from .result import Replay
 
-__all__ = ["ChainReplay", "anchored_at_first_pose", "replay_chain"]
-
-
-@dataclass(eq=False)  # holds arrays
-class ChainReplay:
-    """poses (P, 3): the estimate at each pose index; nis (R,) each re-observation's NIS (2 dof) before its
-    correction and nis_pose (R,) the pose it was taken from; seconds: the filter's own time."""
-
-    ekf: EKFSLAM
-    poses: np.ndarray
-    nis: np.ndarray
-    nis_pose: np.ndarray
-    seconds: float
-
-    @property
-    def steps(self) -> int:
-        return len(self.poses) - 1
+__all__ = ["anchored_at_first_pose", "check_chain", "replay_chain"]
 
 
-def replay_chain(dataset: Gtsam2dDataset, variant: str = "ekf", landmark_prior: float = 1e4) -> ChainReplay:
-    """Run EKF-SLAM (``variant``, inverse initialisation) over ``dataset`` from pose 0 at the origin. Raises
-    ``ValueError`` unless the edges are the odometry chain 0 -> 1 -> ... -> P-1 in order."""
+def check_chain(dataset: Gtsam2dDataset) -> None:
+    """Raise ``ValueError`` naming the file unless its edges are the odometry chain 0 -> 1 -> ... in order,
+    the one order a filter can read them in."""
     steps = len(dataset.edge_first)
     if not (
         np.array_equal(dataset.edge_first, np.arange(steps))
         and np.array_equal(dataset.edge_second, np.arange(1, steps + 1))
     ):
         raise ValueError(f"{dataset.path}: the filter needs the odometry chain 0 -> 1 -> ... in order")
-    ekf = EKFSLAM(
-        dataset.num_landmarks, motion_model="odometry", variant=variant, landmark_prior=landmark_prior,
-        pose_prior=KNOWN_START_POSE_PRIOR, init_mode="inverse", initial_pose=np.zeros(3),
+
+
+def replay_chain(dataset: Gtsam2dDataset, variant: str = "ekf", landmark_prior: float = 1e4) -> Replay:
+    """Run EKF-SLAM (``variant``, inverse initialisation) over ``dataset`` from pose 0 at the origin: poses are
+    the estimate at each pose index, labels the landmark index + 1, ``nis_at`` the pose each re-observation was
+    taken from. Raises ``ValueError`` unless the edges are the odometry chain (``check_chain``)."""
+    check_chain(dataset)
+    steps = len(dataset.edge_first)
+    settings = FilterSettings(
+        motion_model="odometry", variant=variant, init_mode="inverse", landmark_prior=landmark_prior,
+        pose_prior=KNOWN_START_POSE_PRIOR,
     )  # fmt: skip
+    ekf = EKFSLAM(dataset.num_landmarks, settings, initial_pose=np.zeros(3))
     order = np.argsort(dataset.reading_pose, kind="stable")
     starts = np.searchsorted(dataset.reading_pose[order], np.arange(steps + 2))
     poses = np.empty((steps + 1, 3))
@@ -84,7 +77,8 @@ def replay_chain(dataset: Gtsam2dDataset, variant: str = "ekf", landmark_prior: 
             seconds += time.perf_counter() - tic
         poses[pose] = ekf.pose
     nis = np.concatenate(nis_values) if nis_values else np.zeros(0)
-    return ChainReplay(ekf, poses, nis, np.array(nis_poses, dtype=np.int64), seconds)
+    labels = np.arange(1, dataset.num_landmarks + 1, dtype=np.int64)
+    return Replay(ekf, poses, labels, nis, np.array(nis_poses, dtype=np.int64), seconds=seconds)
 
 
 def anchored_at_first_pose(poses: np.ndarray) -> SE2Transform:

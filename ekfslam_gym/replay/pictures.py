@@ -1,85 +1,23 @@
-"""Summaries and pictures of a filter run on real data (``evaluation.mrclam``): NIS against its chi^2 band,
-time per step, landmark errors after alignment, the trajectory and map in the survey's frame.
-
-Real data has no pose truth, so NIS (each re-observation's innovation, 2 dof) is the consistency check: its
-mean is 2 and 95 % of its values lie in chi2(2).ppf([0.025, 0.975]) = [0.051, 7.38] when the filter's noise
-is right; the mean of w consecutive values lies in chi2(2w).ppf([0.025, 0.975]) / w.
-"""
+"""The pictures of a replay on real data: the trajectory and map (3-sigma ellipses) in the survey's frame, and
+NIS over time against its band. Needs matplotlib (the ``render`` extra)."""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any
 
 import numpy as np
-from scipy import stats
 
-from .alignment import SE2Transform
-from .mrclam import RealReplay, landmark_errors
+from ..evaluation.alignment import SE2Transform
+from .figures import nis_band
+from .result import Replay
 
-__all__ = [
-    "nis_band",
-    "nis_summary",
-    "save_map_picture",
-    "save_nis_picture",
-    "save_trajectory_picture",
-    "summarise",
-]
-
-
-def nis_band(window: int = 1, dof: int = 2, confidence: float = 0.95) -> tuple[float, float]:
-    """Two-sided chi^2 band of the mean of ``window`` NIS values of ``dof`` degrees of freedom."""
-    alpha = 1.0 - confidence
-    lo, hi = stats.chi2.ppf([alpha / 2, 1 - alpha / 2], dof * window) / window
-    return float(lo), float(hi)
-
-
-def nis_summary(nis: np.ndarray, window: int = 50) -> dict[str, float]:
-    """Mean NIS, the fraction of single values inside their 95 % band, and of ``window``-long means inside
-    theirs (non-overlapping windows)."""
-    nis = np.asarray(nis, dtype=float)
-    lo, hi = nis_band(1)
-    blocks = nis[: len(nis) // window * window].reshape(-1, window).mean(axis=1)
-    wlo, whi = nis_band(window)
-    return {
-        "readings": int(len(nis)),
-        "mean": float(nis.mean()) if len(nis) else float("nan"),
-        "inside": float(np.mean((nis >= lo) & (nis <= hi))) if len(nis) else float("nan"),
-        "window": window,
-        "windows_inside": float(np.mean((blocks >= wlo) & (blocks <= whi))) if len(blocks) else float("nan"),
-    }
-
-
-def summarise(result: RealReplay, truth_ids: np.ndarray, truth_xy: np.ndarray) -> dict[str, Any]:
-    """The figures of a run: landmark errors after alignment (per landmark, median, count within 0.18 m),
-    NIS, time per step, association counts."""
-    errors, transform = landmark_errors(result.landmark_estimates(), truth_ids, truth_xy)
-    values = np.array(list(errors.values()))
-    settings = result.settings
-    return {
-        "variant": settings.variant,
-        "association": settings.association,
-        "range_std": settings.range_std,
-        "bearing_std": settings.bearing_std,
-        "steps": len(result.drive),
-        "landmark_errors": {str(k): v for k, v in sorted(errors.items())},
-        "median_error": float(np.median(values)) if len(values) else None,
-        "within_0.18": int(np.sum(values <= 0.18)),
-        "landmarks_mapped": len(values),
-        "nis": nis_summary(result.nis),
-        "seconds": result.seconds,
-        "microseconds_per_step": 1e6 * result.seconds / max(len(result.drive), 1),
-        "false_associations": result.false,
-        "missed_associations": result.missed,
-        "new_landmarks": result.new,
-        "alignment": {"angle": transform.angle, "translation": transform.translation.tolist()},
-    }
+__all__ = ["save_map_picture", "save_nis_picture", "save_trajectory_picture"]
 
 
 def save_map_picture(
     path: str | os.PathLike[str],
-    result: RealReplay,
+    result: Replay,
     transform: SE2Transform,
     truth_ids: np.ndarray,
     truth_xy: np.ndarray,

@@ -1,25 +1,40 @@
-"""The full-SLAM smoother on a real drive (``evaluation.mrclam.Drive``), beside the filter on the same data.
+"""The full-SLAM smoother beside the filter on the same real data, and the one comparison of the two.
 
-The graph keeps one pose per time readings were taken (a keyframe) and the start: the odometry between two
-keyframes becomes one pose-pose factor, its relative pose composed through the same velocity-model steps the
-filter predicts with and its covariance propagated through their Jacobians (G Sigma G^T + V M V^T, M the
-filter's step noise); every known-association reading is a range-bearing factor. A prior pins the first pose at
+``compare_with_smoother`` smooths what a replay read (a GTSAM 2-D file's own graph, or an MRCLAM drive's
+keyframes) and measures the filter's trajectory against the smoother's: the trajectory gap (rms and largest
+distance at the smoother's poses), with the smoother's chi^2 and, for a surveyed drive, its landmark errors.
+
+For a drive (``mrclam.Drive``) the graph keeps one pose per time readings were taken (a keyframe) and the
+start: the odometry between two keyframes becomes one pose-pose factor, its relative pose composed through the
+same velocity-model steps the filter predicts with and its covariance propagated through their Jacobians
+(G Sigma G^T + V M V^T, M the filter's step noise); every known-association reading is a range-bearing factor. A prior pins the first pose at
 the origin, where the filter starts. Levenberg-Marquardt (``graph.optimizer``) minimises chi^2 = sum e^T Omega e.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from ..data.gtsam2d import Gtsam2dDataset
 from ..filter.models import velocity_motion
 from ..graph.factors import landmark_from_range_bearing
-from ..graph.optimizer import FactorGraph, OptimizationResult, Values, optimize
+from ..graph.optimizer import GTSAM_LM, FactorGraph, OptimizationResult, Values, optimize
 from ..graph.smoother import ODOMETRY_JITTER
-from .mrclam import Drive, ReplaySettings
+from .chain import anchored_at_first_pose
+from .mrclam import Drive, ReplaySettings, landmark_errors
+from .result import Replay
 
-__all__ = ["DriveSmoothing", "keyframe_odometry", "smooth_keyframes"]
+__all__ = [
+    "DriveSmoothing",
+    "SmootherComparison",
+    "compare_with_smoother",
+    "keyframe_odometry",
+    "smooth_keyframes",
+    "trajectory_gap",
+]
 
 
 @dataclass(eq=False)  # holds arrays
@@ -114,3 +129,70 @@ def smooth_keyframes(
     landmarks[seen] = result.values.landmarks
     dof = 3 + 3 * len(relative) + 2 * len(z) - 3 * len(keyframes) - 2 * len(seen)
     return DriveSmoothing(keyframes, result.values.poses, landmarks, result, dof)
+
+
+def trajectory_gap(filter_poses: np.ndarray, smoothed_poses: np.ndarray) -> tuple[float, float]:
+    """(rms, largest) distance [m] between two trajectories (n, >= 2) pose by pose."""
+    gap = np.hypot(*(np.asarray(smoothed_poses)[:, :2] - np.asarray(filter_poses)[:, :2]).T)
+    return float(np.sqrt(np.mean(gap**2))), float(gap.max())
+
+
+@dataclass(eq=False)  # holds arrays
+class SmootherComparison:
+    """The smoother run on a replay's data, and how far the filter's trajectory lies from its.
+
+    result: the optimiser's. poses (P, 3): the smoother's trajectory in the filter's frame. gap_rms, gap_max
+    [m]: ``trajectory_gap`` at those poses. dof: the chi^2's expected value (None where unknown).
+    landmark_errors [m]: the smoother's landmarks after alignment to a survey (None without one)."""
+
+    result: OptimizationResult
+    poses: np.ndarray
+    gap_rms: float
+    gap_max: float
+    dof: int | None = None
+    landmark_errors: dict[int, float] | None = None
+
+    def figures(self) -> dict[str, Any]:
+        """The JSON-ready figures (``chi2``, ``iterations``, ``seconds``, ``trajectory_gap_rms`` / ``_max``;
+        ``dof`` and the landmark errors with their median where known)."""
+        out: dict[str, Any] = {
+            "chi2": float(self.result.final_error),
+            "iterations": self.result.iterations,
+            "seconds": self.result.seconds,
+            "trajectory_gap_rms": self.gap_rms,
+            "trajectory_gap_max": self.gap_max,
+        }
+        if self.dof is not None:
+            out["dof"] = self.dof
+        if self.landmark_errors is not None:
+            out["landmark_errors"] = {str(k): v for k, v in sorted(self.landmark_errors.items())}
+            out["median_error"] = float(np.median(list(self.landmark_errors.values())))
+        return out
+
+
+def compare_with_smoother(
+    replay: Replay,
+    data: Gtsam2dDataset | Drive,
+    *,
+    settings: ReplaySettings | None = None,
+    survey: tuple[np.ndarray, np.ndarray] | None = None,
+) -> SmootherComparison:
+    """Smooth the data ``replay`` was run on and compare: a GTSAM 2-D file's graph by Levenberg-Marquardt as
+    GTSAM runs it, its free gauge fixed at the first pose (the filter's start); or an MRCLAM ``Drive``'s
+    keyframes (``smooth_keyframes``, needs the replay's ``settings``; ``survey`` (ids, xy) also scores its
+    landmarks after alignment)."""
+    if isinstance(data, Gtsam2dDataset):
+        problem = data.to_problem()
+        result = optimize(problem.graph, problem.initial, "lm", **GTSAM_LM)
+        poses = anchored_at_first_pose(result.values.poses).poses(result.values.poses)
+        return SmootherComparison(result, poses, *trajectory_gap(replay.poses, poses))
+    if settings is None:
+        raise ValueError("smoothing a drive needs the replay's settings (its noise)")
+    ids = survey[0] if survey is not None else replay.labels[replay.labels > 0]
+    smoothing = smooth_keyframes(data, ids, settings, replay.poses)
+    errors = None
+    if survey is not None:
+        estimates = {int(i): xy for i, xy in zip(ids, smoothing.landmarks) if np.all(np.isfinite(xy))}
+        errors, _ = landmark_errors(estimates, *survey)
+    gap = trajectory_gap(replay.poses[smoothing.keyframes + 1], smoothing.poses)
+    return SmootherComparison(smoothing.result, smoothing.poses, *gap, smoothing.dof, errors)

@@ -1,4 +1,5 @@
-"""A recorded drive replayed through EKF-SLAM, with its state read back by the file's landmark ids.
+"""The course's recorded drive (``data.course``) replayed through EKF-SLAM, its state read back by the file's
+landmark ids.
 
 The course's settings (Freiburg *Robot Mapping*, EKF-SLAM exercise): R = diag(0.1, 0.1, 0.01) on the pose,
 Q = 0.01 I per reading, landmark prior 1000, zero pose prior at the origin, course initialisation, batch
@@ -9,54 +10,40 @@ replay's trajectories for the evo tools (``data.tum``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+import time
 from pathlib import Path
 
 import numpy as np
 
 from ..data.course import CourseData, LandmarkMap
+from ..evaluation.plotting import Belief, Frame
 from ..filter import COURSE_MEASUREMENT_NOISE, COURSE_MOTION_NOISE, COURSE_SETTINGS, EKFSLAM
-from .plotting import Belief, Frame
+from .result import Replay
 
 
-@dataclass
-class ReplayResult:
-    """The filter after a replay, with what is needed to read its state by the file's landmark ids."""
+def map_errors(result: Replay, world: LandmarkMap | None) -> dict[int, float]:
+    """Distance [m] from each observed landmark's estimate to its truth in ``world`` (empty without one); the
+    course's frame is the world's, so no alignment."""
+    if world is None:
+        return {}
+    truth = world.as_dict()
+    return {
+        i: float(np.hypot(*(xy - truth[i]))) for i, xy in result.landmark_estimates().items() if i in truth
+    }
 
-    ekf: EKFSLAM
-    steps: int
-    labels: np.ndarray  # (n,) file id of each landmark slot
-    world: LandmarkMap | None = None
-    true_poses: np.ndarray | None = None  # (T+1, 3) when the drive is simulated
-    frames: list[Frame] = field(default_factory=list)
-    last_readings: np.ndarray | None = None  # (m, 2) readings of the last step, for the picture
-    est_path: np.ndarray | None = None  # (steps+1, 3) estimated pose after each step
 
-    def landmark_estimates(self) -> dict[int, np.ndarray]:
-        """``{file id: (x, y)}`` of the observed landmarks, by id."""
-        observed = self.ekf.observed
-        landmarks = self.ekf.landmarks
-        return {int(self.labels[i]): landmarks[i].copy() for i in np.flatnonzero(observed)}
+def map_rmse(result: Replay, world: LandmarkMap | None) -> float | None:
+    """Root mean square landmark error [m] over the observed landmarks with a known truth."""
+    errors = list(map_errors(result, world).values())
+    return float(np.sqrt(np.mean(np.square(errors)))) if errors else None
 
-    def map_errors(self) -> dict[int, float]:
-        """Distance [m] from each observed landmark's estimate to its truth (empty without a world)."""
-        if self.world is None:
-            return {}
-        truth = self.world.as_dict()
-        return {
-            i: float(np.hypot(*(xy - truth[i]))) for i, xy in self.landmark_estimates().items() if i in truth
-        }
 
-    def map_rmse(self) -> float | None:
-        """Root mean square landmark error [m] over the observed landmarks with a known truth."""
-        errors = list(self.map_errors().values())
-        return float(np.sqrt(np.mean(np.square(errors)))) if errors else None
-
-    def frame(self) -> Frame:
-        """The final belief as a picture frame."""
-        return belief_frame(
-            self.ekf, self.labels, self.steps, self.last_readings, self.true_poses, self.est_path
-        )
+def final_frame(result: Replay) -> Frame:
+    """The final belief as a picture frame."""
+    return belief_frame(
+        result.ekf, result.labels, result.steps, result.extras.get("last_readings"),
+        result.extras.get("true_poses"), result.poses,
+    )  # fmt: skip
 
 
 def landmark_labels(data: CourseData, world: LandmarkMap | None) -> np.ndarray:
@@ -109,12 +96,13 @@ def replay(
     init_mode: str = COURSE_SETTINGS.init_mode,
     true_poses: np.ndarray | None = None,
     frame_every: int = 0,
-) -> ReplayResult:
+) -> Replay:
     """Run the course's EKF-SLAM (``COURSE_SETTINGS``, with the course's noise) over the first ``steps`` steps
     of ``data`` (all by default).
 
     Each step is one prediction with its odometry, then one correction with its readings. ``frame_every`` > 0
-    keeps a picture frame every that many steps (and at the last one) for an animation.
+    keeps a picture frame every that many steps (and at the last one) for an animation (``extras["frames"]``,
+    beside the last step's readings and ``true_poses``).
     """
     steps = len(data) if steps is None else steps
     if not 0 < steps <= len(data):
@@ -134,17 +122,21 @@ def replay(
     )
     frames: list[Frame] = []
     path = np.zeros((steps + 1, 3))
+    seconds = 0.0
     for t, block in enumerate(data.steps[:steps], start=1):
+        tic = time.perf_counter()
         ekf.predict(block.odometry)
         if len(block.ids):
             ekf.correct(slot_of[block.ids], block.z)
+        seconds += time.perf_counter() - tic
         path[t] = ekf.pose
         if frame_every > 0 and (t % frame_every == 0 or t == steps):
             frames.append(belief_frame(ekf, labels, t, block.z, true_poses, path[: t + 1].copy()))
-    return ReplayResult(ekf, steps, labels, world, true_poses, frames, data.steps[steps - 1].z, path)
+    extras = {"frames": frames, "last_readings": data.steps[steps - 1].z, "true_poses": true_poses}
+    return Replay(ekf, path, labels, seconds=seconds, extras=extras)
 
 
-def summary(result: ReplayResult) -> dict[str, object]:
+def summary(result: Replay) -> dict[str, object]:
     """The ``--json`` object: steps, pose, pose_cov, observed landmarks by file id, log_det (null if -inf)."""
     log_det = float(result.ekf.log_det)
     return {
@@ -164,7 +156,7 @@ def true_path_name(path: str | Path) -> Path:
     return path.with_name(f"{path.stem}_true{path.suffix}")
 
 
-def export_tum(result: ReplayResult, path: str | Path) -> list[Path]:
+def export_tum(result: Replay, path: str | Path) -> list[Path]:
     """Write the estimated trajectory (the start and the pose after each step, t = 0..steps) to ``path`` as a
     TUM file and, when the true poses are known (a simulated drive; course files have none), the true one to
     :func:`true_path_name`. The course format has no clock, so a step is one second: the timestamp is the step.
@@ -172,7 +164,8 @@ def export_tum(result: ReplayResult, path: str | Path) -> list[Path]:
     from ..data.tum import write_tum
 
     timestamps = np.arange(result.steps + 1, dtype=float)
-    written = [write_tum(path, timestamps, result.est_path[: result.steps + 1])]
-    if result.true_poses is not None:
-        written.append(write_tum(true_path_name(path), timestamps, result.true_poses[: result.steps + 1]))
+    written = [write_tum(path, timestamps, result.poses)]
+    true_poses = result.extras.get("true_poses")
+    if true_poses is not None:
+        written.append(write_tum(true_path_name(path), timestamps, true_poses[: result.steps + 1]))
     return written
