@@ -21,7 +21,7 @@ from ekfslam_gym.replay.formats import detect_dataset
 from ekfslam_gym.replay.mrclam import FITTED_MRCLAM, ReplaySettings, build_drive, replay_drive
 from ekfslam_gym.replay.result import Replay
 from ekfslam_gym.replay.smoother import compare_with_smoother, trajectory_gap
-from tests.test_mrclam import _folder
+from tests.replay.test_mrclam import _folder
 
 STEPS = [(1.0, 0.2, 0.3), (0.5, -0.1, -0.8), (0.0, 0.0, 0.4), (2.0, 0.0, 0.0)]
 READINGS = [
