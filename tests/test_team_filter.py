@@ -168,36 +168,62 @@ def test_resync_finds_no_drift_and_course_zero_prior_starts_tracking():
 
 
 # ------------------------------------------------------------------ a robot-to-robot step is the textbook EKF's
-def test_robot_reading_equals_the_dense_textbook_update():
+def dense_robot_correct(mean, cov, observer, targets, z, Q, variant, prior_poses, iterations=5):
+    """The textbook EKF (full H), FEJ (H at the predicted poses) or Gauss-Newton IEKF correction with robot
+    ``observer``'s readings of robots ``targets``."""
+    size = len(mean)
+    x = mean.copy()
+    rounds = iterations if variant == "iekf" else 1
+    for _ in range(rounds):
+        H = np.zeros((2 * len(targets), size))
+        nu = np.zeros(2 * len(targets))
+        o = 3 * observer
+        for a, j in enumerate(targets):
+            t = 3 * j
+            zj, _, _ = robot_range_bearing(mean[o : o + 3], mean[t : t + 3], 1e-3)
+            if variant == "fej":
+                _, h_observer, h_target = robot_range_bearing(prior_poses[observer], prior_poses[j], 1e-3)
+            else:
+                zj, h_observer, h_target = robot_range_bearing(x[o : o + 3], x[t : t + 3], 1e-3)
+            H[2 * a : 2 * a + 2, o : o + 3] = h_observer
+            H[2 * a : 2 * a + 2, t : t + 3] = h_target
+            nu[2 * a : 2 * a + 2] = z[a] - zj
+        nu[1::2] = [wrap_angle(v) for v in nu[1::2]]
+        S = H @ cov @ H.T + np.kron(np.eye(len(targets)), Q)
+        K = cov @ H.T @ np.linalg.inv(S)
+        new = mean + K @ (nu + H @ (x - mean))
+        converged = np.max(np.abs(new - x)) < 1e-9
+        x = new
+        if converged:
+            break
+    return x, (np.eye(size) - K @ H) @ cov, S, nu
+
+
+@pytest.mark.parametrize("variant", ["ekf", "fej", "iekf"])
+def test_robot_reading_equals_the_dense_textbook_update(variant):
     rng = np.random.default_rng(4)
     landmarks, starts = team_world(rng, n_robots=3, n_landmarks=5)
-    team = TeamEKF(3, 5, initial_poses=starts, measurement_noise=MEASUREMENT_COV, pose_prior=1e-3)
+    team = TeamEKF(
+        3, 5, initial_poses=starts, measurement_noise=MEASUREMENT_COV, pose_prior=1e-3, variant=variant
+    )
     mixed_sequence(rng, team, starts.copy(), landmarks, 30)
-    mean, cov = team.mean.copy(), team.cov.copy()
+    mean, cov, prior_poses = team.mean.copy(), team.cov.copy(), team._prior_poses.copy()
     z = np.array([[2.5, 0.3], [1.7, -1.0]])
     targets = np.array([0, 2])
     observer = 1
-    H = np.zeros((4, team.state_size))
-    expected = np.zeros(4)
-    for a, j in enumerate(targets):
-        zj, h_observer, h_target = robot_range_bearing(mean[3:6], mean[3 * j : 3 * j + 3], 1e-3)
-        H[2 * a : 2 * a + 2, 3:6] = h_observer
-        H[2 * a : 2 * a + 2, 3 * j : 3 * j + 3] = h_target
-        expected[2 * a : 2 * a + 2] = zj
-    nu = z.reshape(-1) - expected
-    nu[1::2] = [wrap_angle(v) for v in nu[1::2]]
-    S = H @ cov @ H.T + np.kron(np.eye(2), MEASUREMENT_COV)
-    K = cov @ H.T @ np.linalg.inv(S)
-    dense_mean = mean + K @ nu
-    dense_cov = (np.eye(team.state_size) - K @ H) @ cov
+    dense_mean, dense_cov, S, nu = dense_robot_correct(
+        mean, cov, observer, targets, z, MEASUREMENT_COV, variant, prior_poses
+    )
     delta = team.correct_robots(observer, targets, z)
     np.testing.assert_allclose(team.cov, dense_cov, atol=1e-10)
-    np.testing.assert_allclose(team.mean[[0, 1, 3, 4, 6, 7]], dense_mean[[0, 1, 3, 4, 6, 7]], atol=1e-10)
+    np.testing.assert_allclose(team.mean[[0, 1, 3, 4, 6, 7]], dense_mean[[0, 1, 3, 4, 6, 7]], atol=1e-9)
     headings = team.mean[[2, 5, 8]] - dense_mean[[2, 5, 8]]
-    np.testing.assert_allclose([wrap_angle(h) for h in headings], 0.0, atol=1e-10)
+    np.testing.assert_allclose([wrap_angle(h) for h in headings], 0.0, atol=1e-9)
     assert delta == pytest.approx(
         2 * np.linalg.slogdet(MEASUREMENT_COV)[1] - np.linalg.slogdet(S)[1], abs=1e-9
     )
+    if variant != "ekf":
+        return
     # NIS of the readings before the update, per reading, from the same S blocks
     check = TeamEKF(3, 5, initial_poses=starts, measurement_noise=MEASUREMENT_COV, pose_prior=1e-3)
     check._mean[:], check._cov[:, :] = mean, cov
@@ -206,6 +232,26 @@ def test_robot_reading_equals_the_dense_textbook_update():
         block = S[2 * a : 2 * a + 2, 2 * a : 2 * a + 2]
         v = nu[2 * a : 2 * a + 2]
         assert nis[a] == pytest.approx(v @ np.linalg.solve(block, v), rel=1e-9)
+
+
+def test_bad_input_names_what_is_wrong():
+    team = TeamEKF(2, 3)
+    with pytest.raises(IndexError, match="robot index 2"):
+        team.predict(2, [0.1, 0.1, 0.0])
+    with pytest.raises(ValueError, match="other than the observer 0"):
+        team.correct_robots(0, [0], [[1.0, 0.0]])
+    with pytest.raises(ValueError, match=r"landmark ids must lie in \[0, 3\)"):
+        team.correct(1, [3], [[1.0, 0.0]])
+    with pytest.raises(ValueError, match="1 ids but 2 readings"):
+        team.correct(1, [0], [[1.0, 0.0], [2.0, 0.0]])
+    with pytest.raises(ValueError, match="readings must be finite"):
+        team.correct_robots(1, [0], [[np.nan, 0.0]])
+    with pytest.raises(ValueError, match=r"initial_poses must be \(2, 3\)"):
+        TeamEKF(2, 3, initial_poses=np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="n_robots must be an integer >= 1"):
+        TeamEKF(0, 3)
+    with pytest.raises(ValueError, match="landmarks must be initialised slots"):
+        team.reading_nis(0, [[1.0, 0.0]], landmarks=[0])
 
 
 # ------------------------------------------------------------------ consistency of robot-to-robot fusion
