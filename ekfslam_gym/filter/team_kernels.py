@@ -61,7 +61,8 @@ def _symmetrise(a: np.ndarray) -> None:
 @njit(cache=True)
 def _inverse(a: np.ndarray) -> np.ndarray:
     """Inverse of a symmetric positive definite matrix: cofactors for 3x3 (one robot, as ``kernels``), else
-    from its Cholesky factor. NaN where it is not positive definite."""
+    L^-T L^-1 from its Cholesky factor L, in plain loops (exactly symmetric). NaN where it is not positive
+    definite."""
     size = a.shape[0]
     if size == 3:
         return inv3(a)
@@ -70,12 +71,21 @@ def _inverse(a: np.ndarray) -> np.ndarray:
     if not _cholesky_in_place(chol):
         out[:, :] = np.nan
         return out
-    unit = np.zeros(size)
-    for c in range(size):
-        unit[:] = 0.0
-        unit[c] = 1.0
-        out[:, c] = _solve_lower_upper(chol, unit)
-    _symmetrise(out)
+    inv_chol = np.zeros((size, size))  # L^-1, lower triangular, column by column
+    for j in range(size):
+        inv_chol[j, j] = 1.0 / chol[j, j]
+        for i in range(j + 1, size):
+            v = 0.0
+            for p in range(j, i):
+                v -= chol[i, p] * inv_chol[p, j]
+            inv_chol[i, j] = v / chol[i, i]
+    for i in range(size):
+        for j in range(i, size):
+            v = 0.0
+            for p in range(j, size):
+                v += inv_chol[p, i] * inv_chol[p, j]
+            out[i, j] = v
+            out[j, i] = v
     return out
 
 
