@@ -52,7 +52,7 @@ class TeamReplaySettings:
     robot_range_std: float | None = None
     robot_bearing_std: float | None = None
     start_window: float = 120.0
-    start_std: tuple[float, float, float] = (0.1, 0.1, 0.05)
+    start_std: tuple[float, float, float] = (0.3, 0.3, 0.15)
     seconds: float = 0.0
 
     def __post_init__(self) -> None:
