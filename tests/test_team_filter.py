@@ -254,6 +254,84 @@ def test_bad_input_names_what_is_wrong():
         team.reading_nis(0, [[1.0, 0.0]], landmarks=[0])
 
 
+# ------------------------------------------------------------------ unknown correspondences
+def with_clutter(rng, z):
+    """The readings in a shuffled order with a reading of nothing among them, half the time."""
+    if rng.random() < 0.5:
+        z = np.vstack([z, [rng.uniform(0.5, 3.0), rng.uniform(-np.pi, np.pi)]])
+    return z[rng.permutation(len(z))]
+
+
+@pytest.mark.parametrize("method", ["nearest", "jcbc"])
+def test_one_robot_unknown_association_reproduces_ekfslam(method):
+    rng = np.random.default_rng(31)
+    drive = loop_drive(rng, 120, ring_landmarks(10), CONTROL_COV, MEASUREMENT_COV)
+    kwargs = dict(measurement_noise=MEASUREMENT_COV, pose_prior=1e-6, landmark_prior=50.0, resync_every=50)
+    single = EKFSLAM(14, COURSE_SETTINGS, initial_pose=drive.true_poses[0], init_mode="inverse", **kwargs)
+    team = TeamEKF(1, 14, COURSE_SETTINGS, initial_poses=drive.true_poses[:1], init_mode="inverse", **kwargs)
+    forgotten = 0
+    for control, (_, z) in zip(drive.controls, drive.readings):
+        single.predict(control, control_cov=CONTROL_COV)
+        team.predict(0, control, control_cov=CONTROL_COV)
+        z = with_clutter(rng, z)
+        expected = single.correct_unknown(z, method, confirm_within=3)
+        got = team.correct_unknown(0, z, method, confirm_within=3)
+        np.testing.assert_array_equal(got.slots, expected.slots)
+        np.testing.assert_array_equal(got.new, expected.new)
+        np.testing.assert_array_equal(got.forgotten, expected.forgotten)
+        assert got.delta == pytest.approx(expected.delta, rel=1e-9, abs=1e-9)
+        forgotten += len(got.forgotten)
+    assert forgotten > 0  # clutter started landmarks that were dropped
+    np.testing.assert_allclose(team.mean, single.mean, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(team.cov, single.cov, rtol=0, atol=1e-12)
+    assert team.log_det == pytest.approx(single.log_det, rel=1e-12)
+
+
+def test_team_associates_each_robot_against_the_shared_map():
+    """Three robots map a ring of landmarks without their identities: each robot's association is the
+    single-robot filter's on its pose and the map, the readings of landmarks another robot started find them,
+    and the bookkeeping stays exact through new and forgotten landmarks."""
+    rng = np.random.default_rng(32)
+    landmarks, starts = team_world(rng, n_robots=3, n_landmarks=8)
+    truth = starts.copy()
+    team = TeamEKF(
+        3, 12, COURSE_SETTINGS, initial_poses=starts, measurement_noise=MEASUREMENT_COV, pose_prior=1e-6,
+        init_mode="inverse", landmark_prior=50.0, resync_every=0,
+    )  # fmt: skip
+    labels = np.full(12, -1)
+    started_by = {}
+    ever: set[int] = set()
+    for step in range(150):
+        robot = step % 3
+        control = np.array([rng.normal(0, 0.1), abs(rng.normal(0.2, 0.05)), rng.normal(0, 0.1)])
+        truth[robot] = odometry_motion(truth[robot], *control)[0]
+        team.predict(
+            robot, control + rng.multivariate_normal(np.zeros(3), CONTROL_COV), control_cov=CONTROL_COV
+        )
+        seen = [j for j in range(8) if range_bearing(truth[robot], landmarks[j], 1e-3)[0][0] < 6.0]
+        ever.update(seen)
+        z = np.array([range_bearing(truth[robot], landmarks[j], 1e-3)[0] for j in seen]).reshape(-1, 2)
+        z += rng.multivariate_normal(np.zeros(2), MEASUREMENT_COV, size=len(z))
+        # associate() is the single-robot filter's on this robot's pose and the map
+        view = EKFSLAM(12, COURSE_SETTINGS, measurement_noise=MEASUREMENT_COV)
+        index = np.r_[3 * robot : 3 * robot + 3, 9:33]
+        view._mean[:], view._cov[:, :] = team.mean[index], team.cov[np.ix_(index, index)]
+        view._observed[:] = team.observed
+        np.testing.assert_array_equal(team.associate(robot, z), view.associate(z))
+        result = team.correct_unknown(robot, z, confirm_within=2)
+        for j, slot, is_new in zip(seen, result.slots, result.new):
+            if slot < 0:
+                continue
+            if is_new:
+                labels[slot], started_by[slot] = j, robot
+            assert labels[slot] == j  # no false association
+        labels[result.forgotten] = -1
+        check_bookkeeping(team)
+    assert len(ever) >= 6
+    assert sorted(labels[team.observed].tolist()) == sorted(ever)  # each landmark read holds one slot
+    assert len(set(started_by.values())) > 1  # the map was started by more than one robot
+
+
 # ------------------------------------------------------------------ consistency of robot-to-robot fusion
 @pytest.mark.parametrize("variant", ["ekf", "fej"])
 def test_robot_to_robot_fusion_is_consistent_monte_carlo(variant):

@@ -16,6 +16,10 @@ API (mirrors ``EKFSLAM``; ``robot`` is a 0-based robot index, ``ids`` 0-based la
     team.predict(robot, control, *, motion_cov=None, control_cov=None) -> d log det
     team.correct(robot, ids, readings, *, measurement_cov=None) -> d log det       # landmarks
     team.correct_robots(robot, targets, readings, *, measurement_cov=None) -> d log det   # other robots
+    team.associate(robot, readings, method="jcbc", gate=0.99) -> slots      # landmarks without their ids
+    team.correct_unknown(robot, readings, method, gate, new_gate, *, confirm_within=0) -> UnknownCorrection
+    team.forget(slot) -> d log det
+    team.reading_nis(robot, readings, *, landmarks=None, robots=None) -> NIS per reading
     team.resync() -> drift;  team.copy()
     team.mean, .cov, .log_det, .observed, .landmarks (n, 2), .landmark_cov(s), .landmark_covs()
     team.poses (N, 3), .pose(robot), .pose_cov(robot) (3, 3), .poses_cov (3N, 3N),
@@ -25,8 +29,10 @@ Every call returns the exact change of log det Sigma, kept by the bookkeeping of
 joint pose covariance conditioned on the map (``team_kernels``), re-synchronised from a Cholesky every
 ``settings.resync_every`` calls. Landmarks start unseen at the ``landmark_prior`` and are initialised by the
 first robot that reads them (``settings.init_mode``), as ``EKFSLAM`` does; ``variant`` (ekf, fej, iekf) and
-``update`` (batch, sequential) apply to both kinds of reading. Known correspondences only: the team's readings
-name their landmarks and robots. With one robot, ``TeamEKF(1, n, ...)`` gives ``EKFSLAM(n, ...)``'s results.
+``update`` (batch, sequential) apply to both kinds of reading. Robot readings name their robots; landmark
+readings name their landmarks (``correct``) or are associated with the team's map (``correct_unknown``: a robot's
+pose and the map are a single robot's state, so ``EKFSLAM``'s nearest-neighbour and JCBC association serve
+unchanged). With one robot, ``TeamEKF(1, n, ...)`` gives ``EKFSLAM(n, ...)``'s results.
 """
 
 from __future__ import annotations
@@ -37,8 +43,10 @@ from typing import Any
 
 import numpy as np
 
+from .. import compiled
 from ..angles import wrap_angle
-from . import codes, team_kernels
+from . import association, codes, team_kernels
+from .association import UnknownCorrection
 from .ekf import (
     _CONTROL_WIDTH,
     _MODEL_CODES,
@@ -69,8 +77,8 @@ class TeamEKF:
         n_robots: robots in the team (>= 1).
         n_landmarks: landmark slots (fixed; readings name them by 0-based index).
         settings: ``FilterSettings`` shared by the team (motion model, variant, initialisation, update mode,
-            priors, resync period); default ``FilterSettings()``. Its association fields are not used: the
-            team filter takes known correspondences.
+            priors, resync period); default ``FilterSettings()``. Its association fields are for the caller to
+            pass to ``correct_unknown``, as with ``EKFSLAM``.
         dt, wheel_base, motion_noise, measurement_noise, min_range: as ``EKFSLAM``'s, for every robot.
         robot_measurement_noise: Q of one robot-to-robot (range, bearing) reading; default
             ``measurement_noise``.
@@ -148,6 +156,10 @@ class TeamEKF:
         self._observed = np.zeros(self.n_landmarks, dtype=bool)
         self._prior_poses = self._mean[:pose_size].reshape(self.n_robots, 3).copy()
         self._first = np.zeros((self.n_landmarks, 2))
+        # correct_unknown's tentative landmarks: corrections left to be matched again before being forgotten.
+        self._tentative = np.zeros(self.n_landmarks, dtype=np.int64)
+        self._started_by = np.zeros(self.n_landmarks, dtype=np.int64)  # the robot whose calls count them down
+        self._association_cache: dict = {}
         self._G_used = np.eye(3)
         self._control = np.zeros(3)
         self._P = np.zeros((pose_size, pose_size))
@@ -369,6 +381,130 @@ class TeamEKF:
             self._mean, self._cov, observers, np.ascontiguousarray(cols), z,
             self._noise(measurement_cov, default), self.min_range,
         )  # fmt: skip
+
+    # ------------------------------------------------------------------ unknown correspondences
+    def associate(
+        self, robot: int, readings, method: association.Method = "jcbc", gate: float = association.DEFAULT_GATE,
+        *, measurement_cov=None,
+    ) -> np.ndarray:  # fmt: skip
+        """The initialised landmark slot each of robot ``robot``'s readings (m, 2) comes from, -1 for none:
+        ``EKFSLAM.associate`` on the robot's pose and the map (their joint Gaussian, a marginal of the team's).
+        Changes nothing."""
+        code, gates, _ = self._association_settings(method, gate, association.DEFAULT_NEW_GATE)
+        robot = self._robot(robot)
+        readings = np.ascontiguousarray(np.asarray(readings, dtype=float).reshape(-1, 2))
+        if not np.all(np.isfinite(readings)):
+            raise ValueError("readings must be finite")
+        slots = np.empty(len(readings), dtype=np.int64)
+        mean, cov = self._robot_view(robot)
+        compiled.associate(
+            mean, cov, self._observed, readings, self._noise(measurement_cov, self.measurement_noise),
+            self.min_range, code, gates, association.MAX_NODES, slots, np.empty(len(readings)),
+        )  # fmt: skip
+        return slots
+
+    def correct_unknown(
+        self, robot: int, readings, method: association.Method = "jcbc", gate: float = association.DEFAULT_GATE,
+        new_gate: float = association.DEFAULT_NEW_GATE, *, confirm_within: int = 0, measurement_cov=None,
+    ) -> UnknownCorrection:  # fmt: skip
+        """``EKFSLAM.correct_unknown`` for robot ``robot``'s readings (m, 2): associate them with the team's map
+        (``associate``), start new landmarks in free slots for readings outside the ``new_gate`` of every
+        landmark, correct with the rest as ``correct`` does, and forget a new landmark not matched again within
+        ``confirm_within`` of the calls for the robot that started it (0: never; a reading by any robot confirms
+        it). Returns an ``UnknownCorrection`` (slots used, which were new, slots forgotten, change of log det
+        Sigma)."""
+        code, gates, new_threshold = self._association_settings(method, gate, new_gate)
+        if (
+            isinstance(confirm_within, bool)
+            or not isinstance(confirm_within, (int, np.integer))
+            or confirm_within < 0
+        ):
+            raise ValueError(f"confirm_within must be an integer >= 0, got {confirm_within!r}")
+        robot = self._robot(robot)
+        readings = np.ascontiguousarray(np.asarray(readings, dtype=float).reshape(-1, 2))
+        if not np.all(np.isfinite(readings)):
+            raise ValueError("readings must be finite")
+        Q = self._noise(measurement_cov, self.measurement_noise)
+        m = len(readings)
+        slots = np.empty(m, dtype=np.int64)
+        nearest = np.empty(m)
+        mean, cov = self._robot_view(robot)
+        compiled.associate(
+            mean, cov, self._observed, readings, Q, self.min_range, code, gates, association.MAX_NODES, slots,
+            nearest,
+        )  # fmt: skip
+        new = np.zeros(m, dtype=bool)
+        free = iter(np.flatnonzero(~self._observed).tolist())
+        for i in np.flatnonzero((slots < 0) & (nearest > new_threshold)):
+            slot = next(free, None)
+            if slot is None:
+                break
+            slots[i], new[i] = slot, True
+        use = slots >= 0
+        delta = self.correct(robot, slots[use], readings[use], measurement_cov=Q)
+        too_close = new & ~self._observed[np.maximum(slots, 0)]  # inverse mode: not initialised, not used
+        slots[too_close], new[too_close] = -1, False
+        self._tentative[slots[(slots >= 0) & ~new]] = 0
+        counting = (self._tentative > 0) & (self._started_by == robot)
+        self._tentative[counting] -= 1
+        forgotten = np.flatnonzero(counting & (self._tentative == 0))
+        if confirm_within > 0:
+            self._tentative[slots[new]] = confirm_within
+            self._started_by[slots[new]] = robot
+        if len(forgotten):
+            delta += self._forget(forgotten)
+        return UnknownCorrection(slots, new, forgotten, delta)
+
+    def forget(self, index: int) -> float:
+        """Return landmark slot ``index`` to the unseen prior (as ``EKFSLAM.forget``); returns the change of
+        log det Sigma (recomputed by ``resync``)."""
+        if (
+            isinstance(index, bool)
+            or not isinstance(index, (int, np.integer))
+            or not 0 <= index < self.n_landmarks
+        ):
+            raise IndexError(f"landmark index {index!r} outside [0, {self.n_landmarks})")
+        return self._forget(np.array([index]))
+
+    def _forget(self, slots: np.ndarray) -> float:
+        for index in slots:
+            j = self.landmark_index(int(index))
+            self._cov[j : j + 2, :] = 0.0
+            self._cov[:, j : j + 2] = 0.0
+            self._cov[j, j] = self._cov[j + 1, j + 1] = self.landmark_prior
+            self._mean[j : j + 2] = 0.0
+        self._first[slots] = 0.0
+        self._observed[slots] = False
+        self._tentative[slots] = 0
+        if not self._tracking:
+            return 0.0
+        before = self._log_det
+        self.resync()
+        return self._log_det - before
+
+    def _robot_view(self, robot: int) -> tuple[np.ndarray, np.ndarray]:
+        """Robot ``robot``'s pose and the map as a single-robot state (mean (3 + 2n,), cov): copies, O(size^2),
+        what a correction costs anyway. With one robot, the state itself."""
+        if self.n_robots == 1:
+            return self._mean, self._cov
+        o = 3 * robot
+        index = np.r_[o : o + 3, 3 * self.n_robots : self.state_size]
+        return self._mean[index], np.ascontiguousarray(self._cov[np.ix_(index, index)])
+
+    def _association_settings(self, method, gate, new_gate) -> tuple[int, np.ndarray, float]:
+        """(method code, joint gates, new-landmark threshold), validated and computed once per setting."""
+        key = (method, gate, new_gate)
+        settings = self._association_cache.get(key)
+        if settings is None:
+            code = association.check_method(method)
+            association.check_probability(gate, "gate")
+            association.check_probability(new_gate, "new_gate")
+            if new_gate < gate:
+                raise ValueError(f"new_gate must be >= gate, got {new_gate!r} < {gate!r}")
+            gates = association.gate_table(gate, self.n_landmarks)
+            settings = (code, gates, association.chi2_even_ppf(new_gate, 2))
+            self._association_cache[key] = settings
+        return settings
 
     # ------------------------------------------------------------------ helpers
     def _robot(self, robot) -> int:
