@@ -66,6 +66,11 @@ def test_five_robots_on_an_excerpt():
     assert np.all(np.isfinite(result.robot_nis)) and np.all(result.robot_nis >= 0)
     assert set(result.robot_observer.tolist()) <= set(range(5))
     assert np.all(result.robot_observer != result.robot_target)
+    for times, values in (
+        (result.landmark_nis_time, result.landmark_nis),
+        (result.robot_nis_time, result.robot_nis),
+    ):
+        assert len(times) == len(values) and np.all(np.diff(times) >= 0)
     sign, log_det = np.linalg.slogdet(team.cov)
     assert sign > 0 and abs(team.log_det - log_det) <= 1e-6 * max(1.0, abs(log_det))
     errors, _ = result.landmark_errors()

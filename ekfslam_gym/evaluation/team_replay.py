@@ -161,8 +161,9 @@ class TeamReplay:
     """A joint replay: the filter at the end, each robot's path, the NIS of the readings.
 
     paths: per robot (K_r + 1, 3), its pose estimate after each of its steps; path_times the matching times.
-    landmark_nis (L,), landmark_observer (L,) robot index; robot_nis (M,), robot_observer (M,), robot_target (M,):
-    each re-observation's NIS (2 dof) before the correction that used it. seconds: the filter's own time.
+    landmark_nis (L,), landmark_observer (L,) robot index, landmark_nis_time (L,) s; robot_nis (M,),
+    robot_observer (M,), robot_target (M,), robot_nis_time (M,) s: each re-observation's NIS (2 dof) before the
+    correction that used it, and its time. seconds: the filter's own time.
     """
 
     team: TeamEKF
@@ -179,6 +180,8 @@ class TeamReplay:
     robot_target: np.ndarray
     seconds: float
     events: int
+    landmark_nis_time: np.ndarray
+    robot_nis_time: np.ndarray
 
     def landmark_estimates(self) -> dict[int, np.ndarray]:
         """``{subject: (x, y)}`` of the landmarks the team mapped."""
@@ -241,7 +244,8 @@ def replay_team(runs: list[MRCLAMRun], settings: TeamReplaySettings | None = Non
     paths = [np.empty((len(d) + 1, 3)) for d in drives]
     for k in range(n):
         paths[k][0] = team.pose(k)
-    nis = {"landmark": [], "landmark_observer": [], "robot": [], "robot_observer": [], "robot_target": []}
+    nis = {name: [] for name in ("landmark", "landmark_observer", "landmark_time", "robot", "robot_observer",
+                                 "robot_target", "robot_time")}  # fmt: skip
     seconds = 0.0
     for group in groups:
         tic = time.perf_counter()
@@ -254,7 +258,11 @@ def replay_team(runs: list[MRCLAMRun], settings: TeamReplaySettings | None = Non
             rows = drives[k].readings(s)
             if rows.stop > rows.start:
                 z, subject = drives[k].z[rows], drives[k].subject[rows]
+                before = len(nis["landmark"]), len(nis["robot"])
                 seconds += _fuse(team, k, z, subject, slot_of, robot_of, settings.robot_readings, nis)
+                for kind, count in zip(("landmark", "robot"), before, strict=True):
+                    if len(nis[kind]) > count:
+                        nis[f"{kind}_time"].append(np.full(len(nis[kind][-1]), end_time[e]))
         for e in group:
             k, s = int(robot[e]), int(step[e])
             paths[k][s + 1] = team.pose(k)
@@ -263,6 +271,7 @@ def replay_team(runs: list[MRCLAMRun], settings: TeamReplaySettings | None = Non
         team, list(runs), drives, settings, starts, paths, path_times,
         _array(nis["landmark"]), _array(nis["landmark_observer"], int), _array(nis["robot"]),
         _array(nis["robot_observer"], int), _array(nis["robot_target"], int), seconds, len(order),
+        _array(nis["landmark_time"]), _array(nis["robot_time"]),
     )  # fmt: skip
 
 
