@@ -135,10 +135,15 @@ def start_poses(
     drives = [build_drive(run) for run in runs]
     poses = np.zeros((len(runs), 3))
     windows = [window]
+    reference_maps: dict[float, dict[int, np.ndarray]] = {}
     for k in range(1, len(runs)):
         span = window
         while True:
-            reference = replay_drive(_head(drives[0], span), ids, settings).landmark_estimates()
+            if span not in reference_maps:
+                reference_maps[span] = replay_drive(
+                    _head(drives[0], span), ids, settings
+                ).landmark_estimates()
+            reference = reference_maps[span]
             own = replay_drive(_head(drives[k], span), ids, settings).landmark_estimates()
             common = sorted(set(reference) & set(own))
             longest = max(drives[0].time[-1] - drives[0].time[0], drives[k].time[-1] - drives[k].time[0])
@@ -214,7 +219,7 @@ def replay_team(runs: list[MRCLAMRun], settings: TeamReplaySettings | None = Non
     n = len(runs)
     Q = np.diag([replay.range_std**2, replay.bearing_std**2])
     start_cov = np.diag(np.square(settings.start_std))
-    covs = np.stack([np.full((3, 3), 0.0) + (1e-10 * np.eye(3) if k == 0 else start_cov) for k in range(n)])
+    covs = np.stack([1e-10 * np.eye(3) if k == 0 else start_cov for k in range(n)])  # the first: the origin
     team = TeamEKF(
         n, len(ids), motion_model="velocity", dt=1.0, variant=replay.variant, measurement_noise=Q,
         robot_measurement_noise=settings.robot_noise(), landmark_prior=replay.landmark_prior,
