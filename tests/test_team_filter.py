@@ -373,3 +373,18 @@ def test_robot_to_robot_fusion_is_consistent_monte_carlo(variant):
     assert np.all(mean_nees > 0.85 * lo), mean_nees
     assert np.all(mean_nees < 1.15 * hi), mean_nees
     assert abs(nees.mean() - dof) < 0.1 * dof
+
+
+def test_copy_is_independent_and_the_filter_pickles():
+    import pickle
+
+    rng = np.random.default_rng(9)
+    landmarks, starts = team_world(rng, n_robots=2, n_landmarks=4)
+    team = TeamEKF(2, 4, initial_poses=starts, measurement_noise=MEASUREMENT_COV, pose_prior=1e-4)
+    mixed_sequence(rng, team, starts.copy(), landmarks, 20)
+    twin, restored = team.copy(), pickle.loads(pickle.dumps(team))
+    np.testing.assert_array_equal(restored.cov, team.cov)
+    assert restored.log_det == team.log_det
+    twin.predict(0, [0.1, 0.2, 0.0], control_cov=CONTROL_COV)
+    assert not np.array_equal(twin.mean, team.mean)
+    np.testing.assert_array_equal(restored.mean, team.mean)
