@@ -44,7 +44,7 @@ def main() -> None:
             ("five robots, one filter", True),
             ("five robots, no robot readings", False),
         ):
-            result = replay_team(runs, TeamReplaySettings(replay=noise, robot_readings=robot_readings))
+            result = replay_team(runs, TeamReplaySettings.with_noise_of(noise, robot_readings=robot_readings))
             results[noise_name, robot_readings] = (result, team_figures(result))
             joint.append((name, results[noise_name, robot_readings][1]))
         print(f"{noise_name} noise\n")

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from ekfslam_gym.data.mrclam import ROBOT_SUBJECTS, load_mrclam
-from ekfslam_gym.evaluation.mrclam import Drive, ReplaySettings
+from ekfslam_gym.evaluation.mrclam import FITTED_MRCLAM, Drive
 from ekfslam_gym.evaluation.team_replay import TeamReplaySettings, replay_team, split_drive
 from ekfslam_gym.filter import EKFSLAM
 from tests.datapaths import mrclam_dir
@@ -83,9 +83,15 @@ def test_five_robots_on_an_excerpt():
     assert len(alone.robot_nis) == 0 and len(alone.landmark_nis) > 0
 
 
-def test_team_settings_refuse_bad_values():
-    with pytest.raises(ValueError, match="association must be 'known'"):
-        TeamReplaySettings(replay=ReplaySettings(association="jcbc"))
+def test_team_settings_take_a_single_replays_noise_and_refuse_bad_values():
+    fitted = TeamReplaySettings.with_noise_of(FITTED_MRCLAM, variant="fej")
+    assert (fitted.range_std, fitted.bearing_std, fitted.variant) == (0.1112, 0.00622, "fej")
+    assert fitted.odometry == FITTED_MRCLAM.odometry
+    np.testing.assert_allclose(fitted.robot_noise(), fitted.measurement_noise())
+    with pytest.raises(ValueError, match="variant must be ekf|fej|iekf"):
+        TeamReplaySettings(variant="ukf")
+    with pytest.raises(ValueError, match="bearing_std must be > 0"):
+        TeamReplaySettings(bearing_std=0.0)
     with pytest.raises(ValueError, match="start_std"):
         TeamReplaySettings(start_std=(0.1, 0.0, 0.1))
     with pytest.raises(ValueError, match="robot_range_std"):

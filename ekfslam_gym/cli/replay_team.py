@@ -21,14 +21,12 @@ def replay_team_data(parser: argparse.ArgumentParser, args: argparse.Namespace) 
         runs = [load_mrclam(args.data, robot) for robot in ROBOT_SUBJECTS]
     except (OSError, ValueError) as error:
         parser.error(str(error))
-    settings = dataclasses.replace(
-        FITTED_MRCLAM if args.noise == "fitted" else ReplaySettings(), variant=args.variant or "ekf"
-    )
-    singles = [
-        single_figures(replay_drive(build_drive(run), run.landmarks.ids, settings), run) for run in runs
-    ]
+    noise = FITTED_MRCLAM if args.noise == "fitted" else ReplaySettings()
+    settings = TeamReplaySettings.with_noise_of(noise, variant=args.variant or "ekf")
+    alone = dataclasses.replace(noise, variant=settings.variant)
+    singles = [single_figures(replay_drive(build_drive(run), run.landmarks.ids, alone), run) for run in runs]
     try:
-        result = replay_team(runs, TeamReplaySettings(replay=settings))
+        result = replay_team(runs, settings)
     except ValueError as error:
         parser.error(str(error))
     joint = team_figures(result)

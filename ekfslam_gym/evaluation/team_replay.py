@@ -21,13 +21,15 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ..data.mrclam import ROBOT_SUBJECTS, MRCLAMRun
+from ..filter.settings import VARIANTS
 from ..filter.team import TeamEKF
 from .alignment import SE2Transform, align_se2
-from .mrclam import Drive, ReplaySettings, build_drive, landmark_errors, replay_drive
+from .mrclam import Drive, IncrementNoise, ReplaySettings, build_drive, landmark_errors, replay_drive
 
 __all__ = [
     "TeamReplay",
@@ -41,13 +43,19 @@ __all__ = [
 
 @dataclass(frozen=True)
 class TeamReplaySettings:
-    """How the joint filter runs: ``replay`` (noise, variant, landmark prior; ``ReplaySettings``, known
-    association only), whether robot readings are fused (``robot_readings``), the robot readings' noise
-    (``robot_range_std`` m, ``robot_bearing_std`` rad; None: the landmark readings'), the window (s) of the
-    single-robot replays whose maps place the robots' starts, and the starts' prior standard deviations
-    (x m, y m, heading rad). ``seconds`` > 0 replays only the first that many seconds (an excerpt)."""
+    """How the joint filter runs: its ``variant`` (ekf, fej, iekf), the landmark readings' noise
+    (``range_std`` m, ``bearing_std`` rad; the textbook EKF's by default), the odometry noise
+    (``IncrementNoise``), the landmark prior (m^2), whether robot readings are fused (``robot_readings``) and
+    their noise (``robot_range_std`` m, ``robot_bearing_std`` rad; None: the landmark readings'), the window (s)
+    of the single-robot replays whose maps place the robots' starts, and the starts' prior standard deviations
+    (x m, y m, heading rad). ``seconds`` > 0 replays only the first that many seconds (an excerpt).
+    ``with_noise_of(single_robot_settings)`` takes a single-robot replay's noise (e.g. ``FITTED_MRCLAM``)."""
 
-    replay: ReplaySettings = field(default_factory=ReplaySettings)
+    variant: str = "ekf"
+    range_std: float = 0.15
+    bearing_std: float = 0.08
+    odometry: IncrementNoise = field(default_factory=IncrementNoise)
+    landmark_prior: float = 100.0
     robot_readings: bool = True
     robot_range_std: float | None = None
     robot_bearing_std: float | None = None
@@ -56,8 +64,12 @@ class TeamReplaySettings:
     seconds: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.replay.association != "known":
-            raise ValueError("the team replay reads barcodes: its ReplaySettings.association must be 'known'")
+        if self.variant not in VARIANTS:
+            raise ValueError(f"TeamReplaySettings.variant must be {'|'.join(VARIANTS)}, got {self.variant!r}")
+        for name in ("range_std", "bearing_std", "landmark_prior"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"TeamReplaySettings.{name} must be > 0, got {value!r}")
         for name in ("robot_range_std", "robot_bearing_std"):
             value = getattr(self, name)
             if value is not None and not (np.isfinite(value) and value > 0):
@@ -71,10 +83,28 @@ class TeamReplaySettings:
         if not (np.isfinite(self.seconds) and self.seconds >= 0):
             raise ValueError(f"TeamReplaySettings.seconds must be >= 0, got {self.seconds!r}")
 
+    @classmethod
+    def with_noise_of(cls, single: ReplaySettings, **changes: Any) -> TeamReplaySettings:
+        """The reading and odometry noise of a single-robot replay's settings, with ``changes``."""
+        noise = {
+            "range_std": single.range_std,
+            "bearing_std": single.bearing_std,
+            "odometry": single.odometry,
+        }
+        return cls(**{**noise, **changes})
+
+    def single_robot(self) -> ReplaySettings:
+        """A single-robot replay with this noise (the start placement's)."""
+        return ReplaySettings(range_std=self.range_std, bearing_std=self.bearing_std, odometry=self.odometry)
+
+    def measurement_noise(self) -> np.ndarray:
+        """Q of one landmark reading (2, 2)."""
+        return np.diag([self.range_std**2, self.bearing_std**2])
+
     def robot_noise(self) -> np.ndarray:
         """Q of one robot reading (2, 2)."""
-        range_std = self.replay.range_std if self.robot_range_std is None else self.robot_range_std
-        bearing_std = self.replay.bearing_std if self.robot_bearing_std is None else self.robot_bearing_std
+        range_std = self.range_std if self.robot_range_std is None else self.robot_range_std
+        bearing_std = self.bearing_std if self.robot_bearing_std is None else self.robot_bearing_std
         return np.diag([range_std**2, bearing_std**2])
 
 
@@ -210,20 +240,18 @@ def replay_team(runs: list[MRCLAMRun], settings: TeamReplaySettings | None = Non
     for run in runs[1:]:
         if not np.array_equal(run.landmarks.ids, ids):
             raise ValueError(f"robot {run.robot}'s landmarks differ from robot {runs[0].robot}'s")
-    replay = settings.replay
-    starts, _ = start_poses(runs, replay, settings.start_window)
+    starts, _ = start_poses(runs, settings.single_robot(), settings.start_window)
     drives = team_drives(runs)
     if settings.seconds > 0:
         begin = min(d.time[0] for d in drives)
         drives = [_head(d, begin + settings.seconds - d.time[0]) for d in drives]
     n = len(runs)
-    Q = np.diag([replay.range_std**2, replay.bearing_std**2])
     start_cov = np.diag(np.square(settings.start_std))
     covs = np.stack([1e-10 * np.eye(3) if k == 0 else start_cov for k in range(n)])  # the first: the origin
     team = TeamEKF(
-        n, len(ids), motion_model="velocity", dt=1.0, variant=replay.variant, measurement_noise=Q,
-        robot_measurement_noise=settings.robot_noise(), landmark_prior=replay.landmark_prior,
-        init_mode=replay.init_mode, initial_poses=starts, initial_pose_covs=covs,
+        n, len(ids), motion_model="velocity", dt=1.0, variant=settings.variant,
+        measurement_noise=settings.measurement_noise(), robot_measurement_noise=settings.robot_noise(),
+        landmark_prior=settings.landmark_prior, init_mode="inverse", initial_poses=starts, initial_pose_covs=covs,
     )  # fmt: skip
     slot_of = np.full(max(int(ids.max()), max(ROBOT_SUBJECTS)) + 1, -1, np.int64)
     slot_of[ids] = np.arange(len(ids))
@@ -233,7 +261,7 @@ def replay_team(runs: list[MRCLAMRun], settings: TeamReplaySettings | None = Non
 
     step_covs = []
     for drive in drives:
-        variances = replay.odometry.variances(drive.increments, drive.dt)
+        variances = settings.odometry.variances(drive.increments, drive.dt)
         c = np.zeros((len(drive), 2, 2))
         c[:, 0, 0], c[:, 1, 1] = variances[:, 0], variances[:, 1]
         step_covs.append(c)

@@ -13,8 +13,8 @@ from typing import Any
 import numpy as np
 
 from ..data.mrclam import MRCLAMRun
-from .mrclam import RealReplay
-from .real_data import nis_summary, summarise
+from .mrclam import RealReplay, landmark_errors
+from .real_data import nis_summary
 from .team_replay import TeamReplay
 
 __all__ = ["save_team_picture", "single_figures", "team_figures", "team_table"]
@@ -33,8 +33,10 @@ def _map_figures(errors: dict[int, float]) -> dict[str, Any]:
 
 
 def single_figures(result: RealReplay, run: MRCLAMRun) -> dict[str, Any]:
-    """A single-robot replay's figures (``real_data.summarise`` against ``run``'s survey) with its robot."""
-    return {"robot": run.robot, **summarise(result, run.landmarks.ids, run.landmarks.positions)}
+    """A single-robot replay's figures against ``run``'s survey: its robot, landmark errors after alignment,
+    NIS of its re-observations."""
+    errors, _ = landmark_errors(result.landmark_estimates(), run.landmarks.ids, run.landmarks.positions)
+    return {"robot": run.robot, **_map_figures(errors), "nis": nis_summary(result.nis)}
 
 
 def team_figures(result: TeamReplay) -> dict[str, Any]:
@@ -51,12 +53,12 @@ def team_figures(result: TeamReplay) -> dict[str, Any]:
                 "start": result.starts[k].tolist(),
             }
         )
-    replay = result.settings.replay
+    settings = result.settings
     return {
         "robots": [run.robot for run in result.runs],
-        "variant": replay.variant,
-        "range_std": replay.range_std,
-        "bearing_std": replay.bearing_std,
+        "variant": settings.variant,
+        "range_std": settings.range_std,
+        "bearing_std": settings.bearing_std,
         "robot_readings": result.settings.robot_readings,
         "events": result.events,
         **_map_figures(errors),
