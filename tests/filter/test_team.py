@@ -12,12 +12,25 @@ from ekfslam_gym.filter import COURSE_SETTINGS, EKFSLAM, FilterSettings
 from ekfslam_gym.filter.models import odometry_motion, range_bearing, wrap_angle
 from ekfslam_gym.filter.team import TeamEKF
 from ekfslam_gym.filter.team_models import robot_range_bearing
-
-from .drives import loop_drive, ring_landmarks
-from .test_models import numeric_jacobian
+from tests.drives import loop_drive, ring_landmarks
 
 CONTROL_COV = np.diag([2e-4, 1e-3, 2e-4])
 MEASUREMENT_COV = np.diag([0.01, 0.002])
+EPS = 1e-6
+
+
+def numeric_jacobian(fn, x, angle_rows=()):
+    """Central differences of fn at x; rows listed in angle_rows are differenced modulo 2 pi."""
+    x = np.asarray(x, dtype=float)
+    columns = []
+    for i in range(x.size):
+        step = np.zeros_like(x)
+        step[i] = EPS
+        diff = np.asarray(fn(x + step)) - np.asarray(fn(x - step))
+        for r in angle_rows:
+            diff[r] = wrap_angle(diff[r])
+        columns.append(diff / (2 * EPS))
+    return np.column_stack(columns)
 
 
 # ------------------------------------------------------------------ the robot-to-robot model
