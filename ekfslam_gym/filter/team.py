@@ -63,6 +63,10 @@ from .settings import FilterSettings
 
 __all__ = ["TeamEKF"]
 
+# The association gates' probabilities when none are given: EKFSLAM's (``filter.association``).
+GATE_PROB = 0.99
+NEW_GATE_PROB = 0.999
+
 
 def _count(value: Any, name: str, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
@@ -77,8 +81,8 @@ class TeamEKF:
         n_robots: robots in the team (>= 1).
         n_landmarks: landmark slots (fixed; readings name them by 0-based index).
         settings: ``FilterSettings`` shared by the team (motion model, variant, initialisation, update mode,
-            priors, resync period); default ``FilterSettings()``. Its association fields are for the caller to
-            pass to ``correct_unknown``, as with ``EKFSLAM``.
+            priors, resync period); default ``FilterSettings()``. Association is chosen per call
+            (``correct_unknown``'s arguments).
         dt, wheel_base, motion_noise, measurement_noise, min_range: as ``EKFSLAM``'s, for every robot.
         robot_measurement_noise: Q of one robot-to-robot (range, bearing) reading; default
             ``measurement_noise``.
@@ -384,13 +388,12 @@ class TeamEKF:
 
     # ------------------------------------------------------------------ unknown correspondences
     def associate(
-        self, robot: int, readings, method: association.Method = "jcbc", gate: float = association.DEFAULT_GATE,
-        *, measurement_cov=None,
+        self, robot: int, readings, method: str = "jcbc", gate: float = GATE_PROB, *, measurement_cov=None,
     ) -> np.ndarray:  # fmt: skip
         """The initialised landmark slot each of robot ``robot``'s readings (m, 2) comes from, -1 for none:
         ``EKFSLAM.associate`` on the robot's pose and the map (their joint Gaussian, a marginal of the team's).
         Changes nothing."""
-        code, gates, _ = self._association_settings(method, gate, association.DEFAULT_NEW_GATE)
+        code, gates, _ = self._association_settings(method, gate, NEW_GATE_PROB)
         robot = self._robot(robot)
         readings = np.ascontiguousarray(np.asarray(readings, dtype=float).reshape(-1, 2))
         if not np.all(np.isfinite(readings)):
@@ -404,8 +407,8 @@ class TeamEKF:
         return slots
 
     def correct_unknown(
-        self, robot: int, readings, method: association.Method = "jcbc", gate: float = association.DEFAULT_GATE,
-        new_gate: float = association.DEFAULT_NEW_GATE, *, confirm_within: int = 0, measurement_cov=None,
+        self, robot: int, readings, method: str = "jcbc", gate: float = GATE_PROB, new_gate: float = NEW_GATE_PROB,
+        *, confirm_within: int = 0, measurement_cov=None,
     ) -> UnknownCorrection:  # fmt: skip
         """``EKFSLAM.correct_unknown`` for robot ``robot``'s readings (m, 2): associate them with the team's map
         (``associate``), start new landmarks in free slots for readings outside the ``new_gate`` of every
