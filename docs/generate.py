@@ -256,7 +256,9 @@ def render_environment() -> str:
         rst_to_markdown(body.replace("## ", "### ")),
         "",
         "The observation's parts, the action kinds and the reward terms are tabled in",
-        "[Spaces and reward](spaces-and-reward.md); every config field in [Configuration](configuration.md).",
+        "[Spaces and reward](spaces-and-reward.md); every config field in [Configuration](configuration.md). The",
+        "paths above name files of the project's repository (`configs/env/` is installed as",
+        "`ekfslam_gym.configs.env`; the pages under `docs/` are this site).",
         "",
         "## Registered ids, their step limits and their overrides",
         "",
@@ -360,7 +362,8 @@ def render_configuration() -> str:
         "",
         "Every field of `EnvConfig`, the frozen, validated configuration an env is built with. Give any of them "
         'to `gym.make` as a section (`gym.make("EKFSLAM-v0", sensor={"max_range": 4.0})`), as a mapping or '
-        "a YAML file in `config=` (`configs/env/default.yaml` writes every field out), or in a training "
+        "a YAML file in `config=` (the repository's `configs/env/default.yaml`, installed in the package as "
+        "`ekfslam_gym.configs.env`, writes every field out), or in a training "
         'config\'s `env_kwargs`. A bad value raises `ValueError` naming the field. "Allowed" is what the '
         "field's own validation accepts.",
         "",

@@ -152,7 +152,7 @@ class ReplaySettings:
     ``nearest`` / ``jcbc`` with the barcodes hidden), reading noise (m, rad), odometry noise, landmark
     initialisation and prior (m^2), and for unknown association the gates and the landmark slots to hold.
 
-    The default reading noise is the textbook EKF's the issue compares with (range 0.15 m, bearing 0.08 rad);
+    The default reading noise is the textbook EKF's, the one it is compared with (range 0.15 m, bearing 0.08 rad);
     ``FITTED_MRCLAM`` holds the noise fitted to MRCLAM robot 1."""
 
     variant: str = "ekf"
