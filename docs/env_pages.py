@@ -25,7 +25,7 @@ HEADLINE = (
     ("map_log_det", "map log det Σ ↓"),
     ("landmark_rmse", "landmark RMSE (m) ↓"),
     ("ate", "ATE (m) ↓"),
-    ("seen_fraction", "landmarks seen ↑"),
+    ("seen_fraction", "fraction seen ↑"),
     ("collisions", "collisions ↓"),
 )
 
@@ -89,9 +89,15 @@ def headline_rows(env_id: str) -> list[tuple[str, dict[str, Any]]]:
     return chosen
 
 
-def headline_table(env_id: str) -> list[str]:
-    """The headline results as Markdown lines (empty without reference rows)."""
-    rows = headline_rows(env_id)
+def headline_table(env_id: str, every_agent: bool = False) -> list[str]:
+    """The headline results as Markdown lines (empty without reference rows): the best baseline and the shipped
+    policy, or ``every_agent``'s rows."""
+    from ekfslam_gym.benchmark import reference_rows
+
+    if every_agent:
+        rows = [("shipped policy" if r["kind"] == "shipped" else r["agent"], r) for r in reference_rows(env_id)]
+    else:
+        rows = headline_rows(env_id)
     if not rows:
         return []
     lines = [

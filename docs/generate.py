@@ -16,6 +16,7 @@ What it writes, and from which single source:
 - ``docs/results/<id>.csv``: every metric of every reference row of an id (``ekfslam_gym.benchmark``);
 - the env pages' entries in ``mkdocs.yml``'s nav (between its ``env-pages`` markers);
 - ``configs/env/default.yaml``: ``EnvConfig()`` with every field written out and a comment per field;
+- the headline tables of ``docs/results.md`` (between its markers) from the reference rows;
 - the info-key table of ``docs/belief-and-truth.md`` (between its markers, the rest of that page written by hand)
   from ``ekfslam_gym.envs.info.INFO_KEYS``.
 
@@ -465,6 +466,23 @@ def render_nav() -> str:
     return head + start + "\n" + entries + indent + end + tail
 
 
+RESULTS_PAGE = DOCS / "results.md"
+
+
+def render_results_page() -> str:
+    """The hand-written results page with each env's headline table made anew between its markers."""
+    text = RESULTS_PAGE.read_text()
+    for env_id in _env_pages().registered_ids():
+        start, end = f"<!-- headline:{env_id}:start -->", f"<!-- headline:{env_id}:end -->"
+        head, found, rest = text.partition(start)
+        if not found:
+            continue  # an id without reference rows has no section yet
+        _, _, tail = rest.partition(end)
+        table = "\n".join(_env_pages().headline_table(env_id, every_agent=True))
+        text = f"{head}{start}\n{table}\n{end}{tail}"
+    return text
+
+
 def render_belief_page() -> str:
     """The hand-written belief-and-truth page with the info-key table between its markers made anew."""
     from ekfslam_gym.envs.info import INFO_KEYS
@@ -494,6 +512,7 @@ def outputs() -> dict[Path, Any]:
         DOCS / "configuration.md": render_configuration,
         ROOT / "configs" / "env" / "default.yaml": render_default_yaml,
         BELIEF_PAGE: render_belief_page,
+        RESULTS_PAGE: render_results_page,
     }
     from ekfslam_gym.benchmark import reference_rows
 

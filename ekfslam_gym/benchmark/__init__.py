@@ -37,7 +37,8 @@ policy hold only some metrics, shown as a dash elsewhere."""
 @cache
 def reference() -> dict[str, Any]:
     """``reference.json``: ``{"about", "protocol", "package", "versions", "envs": {env_id: [row, ...]}}``, each row
-    ``{"agent", "label", "kind" (baseline | shipped), "episodes", "metrics": {key: {"iqm", "ci"}}, "source"}``."""
+    ``{"agent", "label", "kind" (baseline | shipped), "episodes", "metrics": {key: {"iqm", "ci"}}, "source"}``, and
+    ``"package"`` where a row was made by another version of the package than the file's ``package`` names."""
     return json.loads(resources.files(__name__).joinpath("reference.json").read_text(encoding="utf-8"))
 
 
@@ -98,8 +99,9 @@ def reference_note(env_id: str, quick: bool = False) -> str:
         if quick
         else f"comparable: {package['comparable']}"
     )
+    made = " and ".join(sorted({r.get("package", package["ekfslam-gym"]) for r in reference_rows(env_id)}))
     return (
-        f"Reference rows: made by ekfslam-gym {package['ekfslam-gym']} on {env_id.split(':')[-1]}, from "
+        f"Reference rows: made by ekfslam-gym {made} on {env_id.split(':')[-1]}, from "
         f"{'; '.join(sources)} (ekfslam_gym/benchmark/reference.json); {comparable}.\n"
     )
 
