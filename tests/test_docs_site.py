@@ -107,7 +107,17 @@ def test_marked_blocks_are_skipped_and_the_rest_kept(tmp_path) -> None:
 
 
 # ------------------------------------------------------------------------------------ paths a reader has
-CHECKOUT_ONLY = ("configs/", "models/", "tests/", "bench/", "docs/", ".ci/", "train.py", "demo.py", "Makefile")
+CHECKOUT_ONLY = (
+    "configs/",
+    "models/",
+    "tests/",
+    "bench/",
+    "docs/",
+    ".ci/",
+    "train.py",
+    "demo.py",
+    "Makefile",
+)
 WHERE = re.compile(r"checkout|repository|git clone", re.I)
 
 
@@ -142,7 +152,7 @@ def test_the_path_check_finds_what_it_is_for() -> None:
 
 # ------------------------------------------------------------------------------------ the reader's words
 WORKING_WORDS = re.compile(
-    r"(?<!progress )(?<!error )\b(?:bars?(?!-Shalom)|issues?|issue's|maintainers?|yardsticks?|the lead)\b",
+    r"(?<!progress )(?<!error )\b(?:bars?(?!-Shalom)|issue's|issues?|maintainers?|yardsticks?|the lead)\b",
     re.I,
 )
 STRING_SOURCES = [

@@ -46,11 +46,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--plot", type=Path, metavar="FILE.png", help="save a plot of the solution")
     args = parser.parse_args(argv)
 
-    try:
-        problem = read_graph(args.file)
-    except (OSError, ValueError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
+    problem = read_graph(args.file)  # a missing or malformed file: one error line and exit 2 (command_line)
     settings = args.settings
     if settings == "auto":
         settings = "gtsam" if args.file.suffix.lower() in GTSAM_SUFFIXES else "course"
