@@ -67,12 +67,22 @@ def test_a_broken_link_fails_the_build(tmp_path) -> None:
 
 
 # ------------------------------------------------------------------------------------ code that runs
+FILE_MARK = re.compile(r"^# (\w+\.py)\n")
+
+
 def python_blocks(page: Path) -> tuple[list[str], list[str]]:
-    """(blocks to run, reasons of the blocks skipped) of a page's ``python`` blocks."""
+    """(blocks to run, reasons of the blocks skipped) of a page's ``python`` blocks; a block whose first line
+    names a file (``# myagents.py``) is that file's content, saved rather than run (``saved_files``)."""
     blocks = re.findall(r"^```python\n(.*?)^```", page.read_text(), re.S | re.M)
-    run = [b for b in blocks if not SKIP_MARK.match(b)]
+    run = [b for b in blocks if not SKIP_MARK.match(b) and not FILE_MARK.match(b)]
     skipped = [b.split("\n", 1)[0] for b in blocks if SKIP_MARK.match(b)]
     return run, skipped
+
+
+def saved_files(page: Path) -> dict[str, str]:
+    """{file name: content} of the blocks a page asks the reader to save."""
+    blocks = re.findall(r"^```python\n(.*?)^```", page.read_text(), re.S | re.M)
+    return {m.group(1): b for b in blocks if (m := FILE_MARK.match(b))}
 
 
 PYTHON_PAGES = [p for p in PAGES if "```python\n" in p.read_text()]
@@ -88,7 +98,9 @@ def test_python_blocks_run_from_an_empty_folder_outside_the_checkout(page: Path,
         pytest.skip(f"every block of {page.name} is marked: {skipped}")
     folder = tmp_path / "reader"
     folder.mkdir()
-    script = folder.parent / "blocks.py"
+    for name, content in saved_files(page).items():  # what the page asks the reader to save, saved
+        (folder / name).write_text(content)
+    script = folder / "page_blocks.py"  # run as a reader runs a script: from the folder that holds it
     script.write_text("\n\n".join(run))
     result = subprocess.run(
         [sys.executable, str(script)], cwd=folder, capture_output=True, text=True, env=_env(), timeout=900
@@ -104,6 +116,10 @@ def test_marked_blocks_are_skipped_and_the_rest_kept(tmp_path) -> None:
     )
     run, skipped = python_blocks(page)
     assert run == ["print(1)\n"] and skipped == ["# needs the Victoria Park files (see Real data)"]
+    page.write_text("```python\n# mine.py\nX = 1\n```\n\n```python\nfrom mine import X\n```\n")
+    assert python_blocks(page) == (["from mine import X\n"], []) and saved_files(page) == {
+        "mine.py": "# mine.py\nX = 1\n"
+    }
 
 
 # ------------------------------------------------------------------------------------ paths a reader has
