@@ -221,3 +221,16 @@ def test_every_registered_id_has_a_complete_page() -> None:
         assert "## Configuration" in text and "\nmax_episode_steps: " in text and "\nsensor:\n" in text
         assert "legend" in text and f"../images/{env_id}.png" in text
         assert "## Version history" in text and f"**{env_id}**" in text
+
+
+@pytest.mark.slow
+def test_the_readmes_python_blocks_run_in_the_checkout(tmp_path) -> None:
+    """The README is read in the repository, so its blocks run from the checkout's root."""
+    run, _ = python_blocks(ROOT / "README.md")
+    assert run
+    script = tmp_path / "readme_blocks.py"
+    script.write_text("\n\n".join(run))
+    result = subprocess.run(
+        [sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, env=_env(), timeout=900
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
