@@ -95,7 +95,9 @@ def headline_table(env_id: str, every_agent: bool = False) -> list[str]:
     from ekfslam_gym.benchmark import reference_rows
 
     if every_agent:
-        rows = [("shipped policy" if r["kind"] == "shipped" else r["agent"], r) for r in reference_rows(env_id)]
+        rows = [
+            ("shipped policy" if r["kind"] == "shipped" else r["agent"], r) for r in reference_rows(env_id)
+        ]
     else:
         rows = headline_rows(env_id)
     if not rows:
@@ -115,11 +117,29 @@ def _yaml(data: Any) -> str:
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True, default_flow_style=False).strip()
 
 
+SUBSCRIPTS = str.maketrans("0123456789-+tTjmxy", "₀₁₂₃₄₅₆₇₈₉₋₊ₜₜⱼₘₓᵧ")
+
+
 def unicode_math(text: str) -> str:
-    """The docstrings' plain-text maths in clean Unicode: Sigma → Σ, 20 x 20 m → 20 × 20 m."""
-    text = re.sub(r"\bSigma\b", "Σ", text)
-    text = re.sub(r"(\d) x (\d)", r"\1 × \2", text)
-    return text.replace(" +- ", " ± ").replace("<=", "≤").replace(">=", "≥")
+    """The docstrings' plain-text maths in clean Unicode, outside code spans: Sigma_{t-1} → Σₜ₋₁, m^2 → m²,
+    sqrt → √, 20 x 20 m → 20 × 20 m."""
+    parts = re.split(r"(`[^`]*`)", text)
+    for i in range(0, len(parts), 2):  # the even parts lie outside code spans
+        part = re.sub(
+            r"\bSigma_(?:\{([^}]*)\}|([0-9tTjmxy]+))",
+            lambda m: (
+                "Σ" + (m.group(1) or m.group(2)).translate(SUBSCRIPTS)
+                if set(m.group(1) or m.group(2)) <= set("0123456789-+tTjmxy")
+                else m.group(0).replace("Sigma", "Σ")
+            ),
+            parts[i],
+        )
+        part = re.sub(r"\bSigma\b", "Σ", part)
+        part = re.sub(r"\^2\b", "²", part)
+        part = re.sub(r"\bsqrt\b", "√", part)
+        part = re.sub(r"(\d) x (\d)", r"\1 × \2", part)
+        parts[i] = part.replace(" +- ", " ± ").replace("<=", "≤").replace(">=", "≥")
+    return "".join(parts)
 
 
 def render_env_page(env_id: str, generated: str, recipe: str | None = None) -> str:

@@ -253,8 +253,8 @@ def render_environment() -> str:
         "",
         GENERATED.format(source="EKFSLAMEnv's docstring"),
         "",
-        summary,
-        rst_to_markdown(body.replace("## ", "### ")),
+        _env_pages().unicode_math(summary),
+        _env_pages().unicode_math(rst_to_markdown(body.replace("## ", "### "))),
         "",
         "The observation's parts, the action kinds and the reward terms are tabled in",
         "[Spaces and reward](spaces-and-reward.md); every config field in [Configuration](configuration.md). The",
@@ -301,7 +301,7 @@ def render_spaces() -> str:
     ]
     for name, part in layout.slices.items():
         lines.append(f"| `{name}` | {part.start}:{part.stop} | {part.stop - part.start} |")
-    lines += ["", rst_to_markdown(inspect.cleandoc(observation.__doc__ or "")), ""]
+    lines += ["", _env_pages().unicode_math(rst_to_markdown(inspect.cleandoc(observation.__doc__ or ""))), ""]
     lines += [
         "## Action",
         "",
@@ -332,7 +332,10 @@ def render_spaces() -> str:
         "",
         "| term | default weight | meaning |",
         "|---|---|---|",
-        *(f"| `{term.name}` | {term.default} | {_cell(term.meaning)} |" for term in REWARD_TERMS),
+        *(
+            f"| `{term.name}` | {term.default} | {_cell(_env_pages().unicode_math(term.meaning))} |"
+            for term in REWARD_TERMS
+        ),
         "",
     ]
     env.close()
