@@ -181,6 +181,8 @@ def render_env_page(env_id: str, generated: str, recipe: str | None = None) -> s
         "with odometry, and the agent observes that filter's belief, never the true map "
         "([the environments](../environment.md)).",
         "",
+        f"Set apart from the defaults of `EnvConfig()`: {_differences(config)}.",
+        "",
         f"![{env_id}: the belief mid-episode, the frontier planner driving](../images/{env_id}.png)",
         "",
         'The frame `render_mode="rgb_array"` returns, its legend below the map: the true world in black and '
@@ -236,6 +238,35 @@ def render_env_page(env_id: str, generated: str, recipe: str | None = None) -> s
     env.close()
     del version
     return "\n".join(lines)
+
+
+def _flow(data: Any) -> str:
+    import yaml
+
+    return yaml.safe_dump(dict(data), default_flow_style=True, sort_keys=False).strip()
+
+
+def _differences(config: Any) -> str:
+    """The fields where ``config`` differs from ``EnvConfig()``, as ``name: value`` code spans."""
+    import dataclasses
+
+    from ekfslam_gym.envs import EnvConfig
+
+    def leaves(obj: Any, prefix: str = "") -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for f in dataclasses.fields(obj):
+            value = getattr(obj, f.name)
+            if dataclasses.is_dataclass(value):
+                out.update(leaves(value, f"{prefix}{f.name}."))
+            else:
+                out[f"{prefix}{f.name}"] = value
+        return out
+
+    mine, defaults = leaves(config), leaves(EnvConfig())
+    changed = [
+        f"`{k}: {_flow(v) if isinstance(v, dict) else v}`" for k, v in mine.items() if v != defaults.get(k)
+    ]
+    return ", ".join(changed) if changed else "nothing (this id is the defaults)"
 
 
 def _shipped_policy(env_id: str, recipe: str | None) -> list[str]:

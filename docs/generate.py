@@ -244,7 +244,7 @@ def render_environment() -> str:
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401  (registers the ids)
-    from ekfslam_gym.envs import PRESETS, EKFSLAMEnv
+    from ekfslam_gym.envs import EKFSLAMEnv, EnvConfig
 
     doc = inspect.cleandoc(EKFSLAMEnv.__doc__ or "")
     summary, _, body = doc.partition("\n")
@@ -266,9 +266,18 @@ def render_environment() -> str:
         "| id | max_episode_steps | overrides of the defaults | page |",
         "|---|---|---|---|",
     ]
-    for env_id, overrides in PRESETS.items():
+    defaults = {name: value for name, value, _ in _leaves(EnvConfig())}
+    for env_id in _env_pages().registered_ids():
+        env = gym.make(env_id)
+        config = getattr(env.unwrapped, "config", None)
+        changed = [
+            f"`{name}: {_cell(_yaml_value(value))}`"
+            for name, value, _ in (_leaves(config) if config is not None else ())
+            if name in defaults and value != defaults[name]
+        ]
+        env.close()
         lines.append(
-            f"| `{env_id}` | {gym.spec(env_id).max_episode_steps} | `{_cell(repr(overrides))}` "
+            f"| `{env_id}` | {gym.spec(env_id).max_episode_steps} | {', '.join(changed) or 'none: the defaults'} "
             f"| [{env_id}](envs/{env_id}.md) |"
         )
     return "\n".join(lines) + "\n"
