@@ -7,7 +7,7 @@ import sys
 from ekfslam_gym import benchmark
 from ekfslam_gym.cli.benchmark import main
 
-AGENT = '''
+AGENT = """
 import numpy as np
 
 from ekfslam_gym.agents import Agent
@@ -18,7 +18,7 @@ class StandStill(Agent):
 
     def act(self, observation):
         return np.zeros(2, dtype=np.float32)
-'''
+"""
 
 
 def test_your_agent_is_labelled_by_its_name(tmp_path, monkeypatch, capsys):
