@@ -79,6 +79,12 @@ def python_blocks(page: Path) -> tuple[list[str], list[str]]:
     return run, skipped
 
 
+def shown_outputs(page: Path) -> list[str]:
+    """The lines of every ``text`` block a page introduces with "Output:"."""
+    blocks = re.findall(r"^Output:\n\n```text\n(.*?)^```", page.read_text(), re.S | re.M)
+    return [line for block in blocks for line in block.splitlines() if line.strip()]
+
+
 def saved_files(page: Path) -> dict[str, str]:
     """{file name: content} of the blocks a page asks the reader to save."""
     blocks = re.findall(r"^```python\n(.*?)^```", page.read_text(), re.S | re.M)
@@ -107,6 +113,9 @@ def test_python_blocks_run_from_an_empty_folder_outside_the_checkout(page: Path,
     )
     assert result.returncode == 0, f"{page.name}:\n{result.stderr[-3000:]}"
     assert not ROOT.is_relative_to(folder) and not folder.is_relative_to(ROOT)
+    printed = result.stdout.splitlines()
+    for shown in shown_outputs(page):  # what the page says the blocks print, they print
+        assert shown in printed, f"{page.name} shows {shown!r}; the blocks printed {printed}"
 
 
 def test_marked_blocks_are_skipped_and_the_rest_kept(tmp_path) -> None:
@@ -116,6 +125,8 @@ def test_marked_blocks_are_skipped_and_the_rest_kept(tmp_path) -> None:
     )
     run, skipped = python_blocks(page)
     assert run == ["print(1)\n"] and skipped == ["# needs the Victoria Park files (see Real data)"]
+    page.write_text("```python\nprint(2)\n```\n\nOutput:\n\n```text\n2\n```\n")
+    assert shown_outputs(page) == ["2"]
     page.write_text("```python\n# mine.py\nX = 1\n```\n\n```python\nfrom mine import X\n```\n")
     assert python_blocks(page) == (["from mine import X\n"], []) and saved_files(page) == {
         "mine.py": "# mine.py\nX = 1\n"
