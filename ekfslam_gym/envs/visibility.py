@@ -3,7 +3,8 @@
 The sensor reads a landmark when the line of sight from the robot's centre misses every wall capsule
 (``ekfslam_gym.sim.sensor``). Casting rays with the same capsule test (``compiled.cast_rays``, the wall scan's
 kernel) across the field of view gives, per ray, the distance to the first wall surface: the star-shaped
-visibility polygon around the robot. The renderer shades it; nothing here runs in the env's step.
+visibility polygon around the robot. The sensor's ``min_range`` (0.2 m by default, inside the robot's body in the
+picture) is left out. The renderer shades it; nothing here runs in the env's step.
 """
 
 from __future__ import annotations
@@ -52,16 +53,15 @@ def visibility_polygon(
     # is taken at the nearer distance on both rays, so the chord never cuts behind a wall's end.
     nxt = np.roll(reach, -1)
     near = np.minimum(reach, nxt)
-    points = []
-    for i in range(n):
-        points.append(reach[i] * direction[i])
-        if full or i < n - 1:
-            j = (i + 1) % n
-            if reach[i] > near[i]:
-                points.append(near[i] * direction[i])
-            if nxt[i] > near[i]:
-                points.append(near[i] * direction[j])
-    ring = np.array([x, y]) + np.asarray(points)
+    following = np.roll(direction, -1, axis=0)
+    candidates = np.stack(
+        [reach[:, None] * direction, near[:, None] * direction, near[:, None] * following], 1
+    )
+    keep = np.stack([np.ones(n, bool), reach > near, nxt > near], axis=1)
+    if not full:
+        keep[-1, 1:] = False  # a wedge ends at its last ray
+    points = candidates[keep]  # row-major: each ray's end, then its steps towards the next ray
+    ring = np.array([x, y]) + points
     return ring if full else np.vstack([[x, y], ring])
 
 
