@@ -368,6 +368,13 @@ def test_legend_names_every_mark_in_its_own_band() -> None:
     assert len(band) >= 2 * render.LEGEND_ROW
     for colour in (render.TRUE_BODY, render.EST, render.LANDMARK_EST, render.FOV_FILL, render.TEXT):
         assert (band == np.array(colour)).all(axis=-1).any(), colour
+    columns, font = with_legend._legend_columns, with_legend._legend_font()
+    for i, (_, label, _) in enumerate(
+        with_legend._legend_entries()
+    ):  # every label inside the frame, none overlapping
+        column = i % len(columns)
+        right = columns[column] + render.LEGEND_MARK + font.size(label)[0]
+        assert right <= (columns[column + 1] if column + 1 < len(columns) else 640 - render.PAD), label
     labels = [label for _, label, _ in with_legend._legend_entries()]
     assert {"true robot", "true landmark", "true path", "estimated path"} <= set(labels)
     # without the legend the map takes the whole frame

@@ -35,7 +35,8 @@ ARC_POINTS = 32  # points on the field-of-view arc
 PAD = 8  # [px] around the world
 TEXT_BAND = 20  # [px] at the top, kept whether or not there is text so the map never shifts
 LEGEND_ROW = 18  # [px] per row of the legend band at the bottom
-LEGEND_ENTRY = 150  # [px] of width per legend entry
+LEGEND_MARK = 21  # [px] from an entry's left edge to its label
+LEGEND_GAP = 12  # [px] between a label and the next column
 PX_LIMIT = 1.0e5  # [px] coordinates are clamped here so absurd estimates cannot overflow pygame's ints
 
 BACKGROUND = (255, 255, 255)
@@ -141,7 +142,8 @@ class Renderer:
         self._window: Any = None
         self._clock: Any = None
         self._scale, self._ox, self._oy = 1.0, 0.0, 0.0  # set from the scene's bounds on every frame
-        self._legend_band = self._legend_rows() * LEGEND_ROW + 4 if self.options.legend else 0
+        self._legend_columns: list[int] = []  # the x of each column, set with the legend's layout
+        self._legend_band = self._legend_layout() * LEGEND_ROW + 4 if self.options.legend else 0
         if self.height - 2 * PAD - TEXT_BAND - self._legend_band < 1:
             raise ValueError(
                 f"height {height} leaves no room for the map under the legend; make the frame taller or pass "
@@ -219,7 +221,7 @@ class Renderer:
         self._draw_landmarks_true(np.asarray(scene.landmarks_true, dtype=float).reshape(-1, 2))
         self._draw_landmarks_est(landmarks_est, np.asarray(scene.landmark_covs, dtype=float), seen)
 
-        radius = max(2.0, self._scale * float(scene.robot_radius))
+        radius = max(5.0, self._scale * float(scene.robot_radius))  # [px] seen even in a large world
         if true_ok:
             centre = self._px(pose_true[:2])
             pg.draw.circle(surf, TRUE_BODY, centre, radius)
@@ -364,21 +366,33 @@ class Renderer:
             ("area", "what the sensor sees", FOV_EDGE),
         ]
 
-    def _legend_rows(self) -> int:
-        per_row = max(1, (self.width - 2 * PAD) // LEGEND_ENTRY)
-        return -(-len(self._legend_entries()) // per_row)
+    def _legend_layout(self) -> int:
+        """Lay the entries out in as many columns as fit the frame, each as wide as its longest label; the
+        number of rows."""
+        entries = self._legend_entries()
+        font = self._legend_font()
+        widths = [font.size(label)[0] if font is not None else 8 * len(label) for _, label, _ in entries]
+        for columns in range(len(entries), 0, -1):
+            column_widths = [
+                max(widths[i] for i in range(c, len(entries), columns)) + LEGEND_MARK + LEGEND_GAP
+                for c in range(columns)
+            ]
+            if sum(column_widths) - LEGEND_GAP <= self.width - 2 * PAD or columns == 1:
+                self._legend_columns = [PAD + sum(column_widths[:c]) for c in range(columns)]
+                return -(-len(entries) // columns)
+        return len(entries)  # unreachable: one column always fits the loop's last test
 
     def _draw_legend(self) -> None:
         """The legend band under the map: a sample of each mark and what it is."""
         pg = self._pg
         surf = self._surface
         font = self._legend_font()
-        per_row = max(1, (self.width - 2 * PAD) // LEGEND_ENTRY)
+        columns = self._legend_columns
         top = self.height - self._legend_band + 2
         pg.draw.line(surf, BOUNDS, (PAD, top - 2), (self.width - PAD, top - 2))
         for i, (mark, label, colour) in enumerate(self._legend_entries()):
-            x = PAD + (i % per_row) * LEGEND_ENTRY
-            y = top + (i // per_row) * LEGEND_ROW + LEGEND_ROW // 2
+            x = columns[i % len(columns)]
+            y = top + (i // len(columns)) * LEGEND_ROW + LEGEND_ROW // 2
             if mark == "disc":
                 pg.draw.circle(surf, TRUE_BODY, (x + 8, y), 6)
                 pg.draw.circle(surf, TRUE, (x + 8, y), 6, width=1)
@@ -397,14 +411,14 @@ class Renderer:
                 pg.draw.line(surf, colour, (x, y), (x + 16, y), 2)
             if font is not None:
                 text = font.render(label, True, TEXT)
-                surf.blit(text, (x + 21, y - text.get_height() // 2))
+                surf.blit(text, (x + LEGEND_MARK, y - text.get_height() // 2))
 
     def _legend_font(self) -> Any:
         if not self._small_font_tried:
             self._small_font_tried = True
             try:
                 self._pg.font.init()
-                self._small_font = self._pg.font.Font(None, 17)
+                self._small_font = self._pg.font.Font(None, 18)
             except Exception:  # a missing font must not break rendering: the marks are still drawn
                 self._small_font = None
         return self._small_font
