@@ -1,7 +1,7 @@
 """The planners that demonstrate in a macro action interface, for behaviour cloning (``ekfslam_gym.training``).
 
-A policy learns faster when a planner teaches it first (imitation, then RL: planner-guided training). For the
-demonstrations to be imitable they must be in the policy's own interface. Two planners act in one:
+A policy learns faster when a planner teaches it first (imitation, then RL: planner-guided training).
+For the demonstrations to be imitable they must be in the policy's own interface. Two planners act in one:
 
 - ``greedy``: ``GreedyPrimitivesPlanner``, the greedy information-gain planner (``ekfslam_gym.agents.greedy``)
   choosing, once per env step of a primitives env (``action.kind: primitives``), the index of the primitive to

@@ -36,7 +36,8 @@ policy hold only some metrics, shown as a dash elsewhere."""
 @cache
 def reference() -> dict[str, Any]:
     """``reference.json``: ``{"about", "protocol", "package", "versions", "envs": {env_id: [row, ...]}}``, each row
-    ``{"agent", "label", "kind" (baseline | shipped), "episodes", "metrics": {key: {"iqm", "ci"}}, "source"}``."""
+    ``{"agent", "label", "kind" (baseline | shipped), "episodes", "metrics": {key: {"iqm", "ci"}}, "source"}``, and
+    ``"package"`` where a row was made by another version of the package than the file's ``package`` names."""
     return json.loads(resources.files(__name__).joinpath("reference.json").read_text(encoding="utf-8"))
 
 
@@ -90,6 +91,22 @@ def _cell(metric: Mapping[str, Any] | None) -> str:
     return f"{format_value(metric['iqm'])} [{format_value(lo)}, {format_value(hi)}]"
 
 
+def reference_note(env_id: str, quick: bool = False) -> str:
+    """Which package made the reference rows, from where, and whether a run's row can be read against them."""
+    package = reference()["package"]
+    sources = sorted({f"{r['source']['file']} at {r['source']['commit']}" for r in reference_rows(env_id)})
+    comparable = (
+        "not comparable with this --quick run (5 of the 50 seeds)"
+        if quick
+        else f"comparable: {package['comparable']}"
+    )
+    made = " and ".join(sorted({r.get("package", package["ekfslam-gym"]) for r in reference_rows(env_id)}))
+    return (
+        f"Reference rows: made by ekfslam-gym {made} on {env_id.split(':')[-1]}, from "
+        f"{'; '.join(sources)} (ekfslam_gym/benchmark/reference.json); {comparable}.\n"
+    )
+
+
 def reproduces(result: Mapping[str, Any], row: Mapping[str, Any]) -> dict[str, bool]:
     """Per metric the two share: whether ``result`` prints as the reference ``row`` (IQM and CI)."""
     return {
@@ -129,11 +146,6 @@ def markdown(report: Mapping[str, Any], keys: Sequence[str] = TABLE_KEYS) -> str
             text.append(f"Against its reference row: {agreed} of {len(result['reproduces'])} metrics print the "
                         f"same{'' if not differ else '; differ: ' + ', '.join(differ)}.\n")  # fmt: skip
         if result["reference"]:
-            made = reference()["package"]["ekfslam-gym"]
-            sources = sorted(
-                {f"{r['source']['file']} at {r['source']['commit']}" for r in result["reference"]}
-            )
-            text.append(f"Reference rows: ekfslam-gym {made}, from {'; '.join(sources)} "
-                        "(ekfslam_gym/benchmark/reference.json).\n")  # fmt: skip
+            text.append(reference_note(env_id, quick=report["quick"]))
         parts.append("\n".join(text))
     return "\n".join(parts)

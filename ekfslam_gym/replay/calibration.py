@@ -1,6 +1,6 @@
 """Noise fitted to a real drive by maximum likelihood of the filter's innovations.
 
-Without pose truth the only yardstick is the readings themselves: a filter whose noise is right predicts each
+Without pose truth the only reference is the readings themselves: a filter whose noise is right predicts each
 re-observation with the covariance S it reports. The prediction-error decomposition of the likelihood (Schweppe,
 "Evaluation of likelihood functions for Gaussian signals", IEEE T-IT 11(1), 1965) makes this a number to
 maximise over the noise parameters:

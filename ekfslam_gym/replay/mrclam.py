@@ -163,8 +163,8 @@ class ReplaySettings:
     ``jcbc`` with the barcodes hidden, their gates), the reading noise (m, rad), the odometry noise, and the
     landmark slots an unknown association holds.
 
-    The default reading noise is the textbook EKF's (range 0.15 m, bearing 0.08 rad); ``FITTED_MRCLAM`` holds
-    the noise fitted to MRCLAM robot 1."""
+    The default reading noise is the textbook EKF's, the one it is compared with (range 0.15 m, bearing 0.08 rad);
+    ``FITTED_MRCLAM`` holds the noise fitted to MRCLAM robot 1."""
 
     filter: FilterSettings = MRCLAM_FILTER
     association: AssociationSettings = AssociationSettings()
