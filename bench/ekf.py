@@ -123,14 +123,16 @@ def measure(n: int, rng: np.random.Generator, budget: float) -> dict:
 
     prior, first, G_used = mean[:3].copy(), ekf._first.copy(), np.eye(3)
     H_used, H_slots = np.zeros((len(ids), 2, 5)), np.zeros(len(ids), dtype=np.int64)
+    # the kernels' bundles (filter.kernels.FilterArrays, FilterOptions), as EKFSLAM builds them
+    arrays = (mean, cov, P, observed, prior, first, G_used, H_used, H_slots)
+    options = (MODEL_ODOMETRY, 0.1, 0.3, 1e-3, False, False, VARIANT_EKF, 1)
 
     def fast_predict():
-        kernels.predict(mean, cov, P, MODEL_ODOMETRY, control, 0.1, 0.3, R, False, True, prior, False, G_used)
+        kernels.predict(arrays, options, control, R, False, True)
 
     def fast_correct():
         restore()
-        kernels.correct(mean, cov, P, observed, ids, z, Q, 1e-3, False, False, True, VARIANT_EKF, 1, prior, first,
-                        H_used, H_slots)  # fmt: skip
+        kernels.correct(arrays, options, ids, z, Q, True)
 
     k = 2 * READINGS_PER_STEP
     S_factor = np.linalg.cholesky(np.eye(k) + 0.1)
