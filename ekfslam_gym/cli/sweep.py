@@ -118,12 +118,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.config = resolve_config(args.config).resolve()
     except FileNotFoundError as error:
         parser.error(str(error))
-    hyperparams = settings.parse_hyperparams(args.hyperparams)
+    try:
+        hyperparams = settings.parse_hyperparams(args.hyperparams)
+    except settings.SettingsError as error:
+        parser.error(str(error))
 
     trials = []
     for env_id in env_ids:
-        entry = settings.resolve_entry(args.config, env_id, hyperparams, timesteps=args.timesteps)
-        try:  # every trial's settings, checked before any runs
+        try:  # every trial's settings (the config's entry, --hyperparams), checked before any runs
+            entry = settings.resolve_entry(args.config, env_id, hyperparams, timesteps=args.timesteps)
             entry = settings.validate_entry(entry, env_id)
             for seed in args.seeds:
                 check_not_held_out(
