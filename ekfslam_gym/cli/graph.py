@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..graph.sparse_solve import BACKENDS
-from .common import command_line, command_parser
+from .common import command_line, command_parser, error_message
 
 
 @command_line("graph")
@@ -44,7 +44,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     from ..data.graph_files import GTSAM_SUFFIXES, read_graph
     from ..graph.optimizer import GTSAM_LM, optimize
 
-    problem = read_graph(args.file)  # a missing or malformed file: one error line and exit 2 (command_line)
+    try:
+        problem = read_graph(args.file)
+    except (OSError, ValueError) as error:  # the file the user named: one error line, exit 2 (command_line)
+        raise SystemExit(error_message(error)) from None
     settings = args.settings
     if settings == "auto":
         settings = "gtsam" if args.file.suffix.lower() in GTSAM_SUFFIXES else "course"

@@ -1,4 +1,4 @@
-"""Cooperative SLAM on MRCLAM (``evaluation.team_replay``): cutting a drive's steps is exact, the joint replay
+"""Cooperative SLAM on MRCLAM (``replay.team``): cutting a drive's steps is exact, the joint replay
 of an excerpt of the five robots runs with its bookkeeping exact, and the command line's ``--team`` checks."""
 
 from __future__ import annotations
