@@ -45,6 +45,10 @@ def _build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of Markdown")
     parser.add_argument("--out", type=Path, default=None, help="write benchmark.md and benchmark.json here")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
+    parser.add_argument("--suite", choices=["generalisation"], default=None,
+                        help="generalisation: every baseline and shipped policy on every v1 layout id, the "
+                             "training families' held-out seeds and the held-out families (no --agent; --out "
+                             "DIR keeps a CSV of the episodes, and a run stopped early resumes from it)")  # fmt: skip
     return parser
 
 
@@ -83,6 +87,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     parser = _build_parser()
     args = parser.parse_args(argv)
+    if args.suite is not None:
+        return _suite(args, parser)
     make, label, model_ids = _factory(args, parser)
     registered = sorted(i for i in gym.registry if i.startswith("EKFSLAM"))
     if args.env_ids is None:
@@ -112,6 +118,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         (args.out / "benchmark.md").write_text(text)
         (args.out / "benchmark.json").write_text(json.dumps(report, indent=1, allow_nan=False))
     print(json.dumps(report, allow_nan=False) if args.json else text, end="\n" if args.json else "")
+    return 0
+
+
+def _suite(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """``--suite generalisation`` (``ekfslam_gym.benchmark.generalisation``)."""
+    from ..benchmark.generalisation import run_suite
+
+    if args.agent is not None or args.model is not None or args.env_ids is not None:
+        parser.error("--suite runs every baseline and shipped policy on its own envs: leave out --agent, "
+                     "--model and --env-ids")  # fmt: skip
+    report = None if args.no_progress else (lambda line: print(line, file=sys.stderr, flush=True))
+    print(run_suite(quick=args.quick, out=args.out, progress=report), end="")
     return 0
 
 

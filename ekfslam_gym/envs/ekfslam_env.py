@@ -12,12 +12,13 @@ import numpy as np
 
 from .. import compiled
 from ..filter.ekf import EKFSLAM, FilterDivergedError
-from ..sim.layouts import make_layout
+from ..sim.layouts import Layout, make_layout
 from ..sim.sensor import Readings
 from ..sim.world import World
 from . import rewards
 from .actions import make_interface
-from .config import EnvConfig, build_config
+from .config import EnvConfig, WorldConfig, build_config
+from .episode import step_limit
 from .observation import ObservationLayout, make_memory, observation_constants, observation_space
 from .rewards import StepContext, Telescoped
 
@@ -136,9 +137,10 @@ class EKFSLAMEnv(gym.Env):
         render_mode: str | None = None,
         *,
         preset: str | None = None,
+        tier: str | None = None,
         **overrides: Any,
     ) -> None:
-        config = build_config(config, preset, overrides)
+        config = build_config(config, preset, overrides, tier)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}"
@@ -172,8 +174,10 @@ class EKFSLAMEnv(gym.Env):
         self._cell_area = config.observation.memory_resolution**2
         # Constants of the step, read once here rather than through the config at every step.
         self._v_max, self._omega_max = config.robot.v_max, config.robot.omega_max
+        self._dt = config.dt
         self._done_variance = config.done_std**2 if config.done_std > 0 else -math.inf
-        self._max_steps = config.max_episode_steps
+        self._max_steps = step_limit(config)
+        self._complete_terminates = config.terminate_on_complete
         # Readings go through ``_correct_unknown`` when the filter associates them itself, or to drop clutter.
         self._unknown = config.filter.association != "known" or config.sensor.clutter_rate > 0
         self._world: World | None = None
@@ -190,15 +194,14 @@ class EKFSLAMEnv(gym.Env):
         wrapper and the env agree; ``config.max_episode_steps`` reports the limit in force.
         """
         self.config = EnvConfig.from_overrides(self.config, max_episode_steps=steps)
-        self._max_steps = self.config.max_episode_steps
+        self._max_steps = step_limit(self.config)
 
     # ------------------------------------------------------------------ episode
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
         cfg = self.config
         rng = self.np_random
-        layout_kwargs = {"robot_radius": cfg.robot.radius, **cfg.world.layout_kwargs}
-        layout = make_layout(cfg.world.layout, rng, cfg.world.n_landmarks, **layout_kwargs)
+        layout = self._make_layout(cfg.world, rng)
         self._world = World(layout, cfg.robot, cfg.sensor, cfg.odometry, None, cfg.dt, cfg.substeps)
         f = cfg.filter
         self._ekf = ekf = EKFSLAM(
@@ -230,6 +233,7 @@ class EKFSLAMEnv(gym.Env):
         self._t = 0
         self._steps = 0
         self._loop_closures = 0
+        self._complete_time = math.inf  # s from reset to a complete map; inf until then
         self._collisions = 0
         self._path_length = 0.0
         self._filter_failed = False
@@ -396,10 +400,20 @@ class EKFSLAMEnv(gym.Env):
 
     # ------------------------------------------------------------------ hooks of a step
     def _is_terminated(self) -> bool:
-        """A wall contact when ``terminate_on_collision``, or every landmark certain to ``done_std``."""
+        """A wall contact when ``terminate_on_collision``, or a complete map (every landmark certain to
+        ``done_std``) when ``terminate_on_complete``; notes the control step the map was first complete at."""
         if self._collided and self.config.terminate_on_collision:
             return True
-        return self._worst_variance < self._done_variance
+        complete = self._worst_variance < self._done_variance
+        if complete and self._complete_time == math.inf:
+            self._complete_time = round(self._t * self._dt, 9)
+        return complete and self._complete_terminates
+
+    def _make_layout(self, world: WorldConfig, rng: np.random.Generator) -> Layout:
+        """The episode's layout from the ``world`` section, drawn from ``rng`` (a hook: an env that draws its
+        world at every reset overrides it)."""
+        layout_kwargs = {"robot_radius": self.config.robot.radius, **world.layout_kwargs}
+        return make_layout(world.layout, rng, world.n_landmarks, **layout_kwargs)
 
     def _is_truncated(self) -> bool:
         """The step limit (``config.max_episode_steps``, which a ``gym.make`` TimeLimit sets) is reached."""
@@ -439,6 +453,7 @@ class EKFSLAMEnv(gym.Env):
             "filter_failed": self._filter_failed,
             "false_associations": self._false_associations,
             "missed_associations": self._missed_associations,
+            "time_to_complete": self._complete_time,
         }
 
     # ------------------------------------------------------------------ pieces
