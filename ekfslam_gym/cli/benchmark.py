@@ -1,7 +1,8 @@
-"""The standard protocol in one command: an agent on the held-out suite of every registered env (or
-``--env-ids``), IQM with 95 % bootstrap CIs, beside the reference rows (the baselines and shipped policies of
-the last full run, ``ekfslam_gym/benchmark/reference.json``). Markdown on stdout (``--json``: one JSON object);
-``--out DIR`` writes ``benchmark.md`` and ``benchmark.json``.
+"""The standard protocol in one command: an agent on the held-out suite of every env with reference rows (the
+v0 ids; or ``--env-ids``), IQM with 95 % bootstrap CIs, beside the reference rows (the baselines and shipped
+policies of the last full run, ``ekfslam_gym/benchmark/reference.json``). Markdown on stdout (``--json``: one
+JSON object); ``--out DIR`` writes ``benchmark.md`` and ``benchmark.json``. ``--suite generalisation`` runs
+the generalisation suite instead (``ekfslam_gym.benchmark.generalisation``).
 
 Usage::
 
@@ -9,6 +10,7 @@ Usage::
     ekfslam-benchmark --agent ppo                                    # the shipped policy of every env
     ekfslam-benchmark --model runs/x/best_model.zip                  # a saved model, on the env of its record
     ekfslam-benchmark --agent myagents:make_agent --quick            # your own agent, 5 seeds (a smoke test)
+    ekfslam-benchmark --suite generalisation --out results           # every agent on the v1 ids and families
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..benchmark import QUICK_EPISODES, markdown, run
+from ..benchmark import QUICK_EPISODES, markdown, reference_rows, run
 from ..seeds import HELD_OUT
 from .common import command_line, command_parser, json_object
 
@@ -38,7 +40,8 @@ def _build_parser() -> argparse.ArgumentParser:
         "--agent-kwargs", type=json_object, default=None, help="constructor arguments as JSON"
     )
     parser.add_argument("--env-ids", default=None,
-                        help="comma-separated env ids; default every registered one (with --model: its record's)")  # fmt: skip
+                        help="comma-separated env ids; default those with reference rows, the v0 ids (with "
+                             "--model: its record's)")  # fmt: skip
     parser.add_argument("--force", action="store_true", help="run a model on env ids other than its own")
     parser.add_argument("--quick", action="store_true",
                         help=f"the suite's first {QUICK_EPISODES} seeds: a smoke test, not a result")  # fmt: skip
@@ -92,7 +95,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     make, label, model_ids = _factory(args, parser)
     registered = sorted(i for i in gym.registry if i.startswith("EKFSLAM"))
     if args.env_ids is None:
-        env_ids = [i for i in model_ids if i] if model_ids else registered
+        env_ids = [i for i in model_ids if i] if model_ids else [i for i in registered if reference_rows(i)]
     else:
         env_ids = [e.strip() for e in args.env_ids.split(",") if e.strip()]
     if unknown := [e for e in env_ids if e.split(":")[-1] not in gym.registry]:
