@@ -111,9 +111,14 @@ FIELD_NOTES: dict[str, tuple[str, str]] = {
     "action.guard": ("m", "primitives only: stop short of walls the scan shows (0: off)"),
     "dt": ("s", "control period"),
     "substeps": ("", "physics steps per control step"),
-    "max_episode_steps": ("env steps", "the step limit (truncation, and the time-left entry's horizon)"),
+    "max_episode_steps": (
+        "env steps",
+        "the step limit (truncation, and the time-left entry's horizon); null: from episode_time",
+    ),
+    "episode_time": ("s", "the episode's simulated time when max_episode_steps is null, for every action kind"),
     "terminate_on_collision": ("", "end the episode at the first wall contact"),
-    "done_std": ("m", "end the episode once every landmark's standard deviation is below this (0: never)"),
+    "done_std": ("m", "the map is complete once every landmark's standard deviation is below this (0: never)"),
+    "terminate_on_complete": ("", "end the episode once the map is complete (v0; the v1 ids run to their horizon)"),
     "loop_gap": (
         "steps",
         "a landmark re-read after at least this many steps unseen counts as a loop closure",

@@ -106,12 +106,15 @@ class EKFSLAMEnv(gym.Env):
 
     ## Episode End
     Terminated: on a wall contact if ``terminate_on_collision``; when every landmark's marginal standard
-    deviation is below ``done_std`` m; when the filter fails numerically (``info["filter_failed"]``, never an
-    exception). Truncated after the step limit N in env steps, one number for ``gym.make``'s TimeLimit, the
-    env's own truncation and the time-left entry (``ekfslam_gym.envs.horizon``): the registered id's limit
-    (500, 800, 1000 control steps), divided by ``action.hold`` for macro actions so that an episode lasts the
-    same simulated time, unless ``gym.make(id, max_episode_steps=N)`` or the config's ``max_episode_steps``
-    gives N.
+    deviation is below ``done_std`` m (the map is complete) if ``terminate_on_complete`` (v0 only: a v1
+    episode runs on to its horizon, and ``info["time_to_complete"]`` says when the map was complete); when the
+    filter fails numerically (``info["filter_failed"]``, never an exception). Truncated after the step limit N
+    in env steps, one number for ``gym.make``'s TimeLimit, the env's own truncation and the time-left entry.
+    v1 ids: ``episode_time`` s of simulated time divided by the control steps of an env step, the same time
+    for every action kind, unless ``gym.make(id, max_episode_steps=N)`` or the config's ``max_episode_steps``
+    gives N env steps (``ekfslam_gym.envs.episode``). v0 ids: the registered limit (500, 800, 1000 control
+    steps), divided by ``action.hold`` for macro actions, unless a limit other than it is given
+    (``ekfslam_gym.envs.horizon``).
 
     ## Arguments
     ``gymnasium.make("EKFSLAM-v0", config=None, render_mode=None, **overrides)``: ``config`` is a mapping of
@@ -119,7 +122,8 @@ class EKFSLAMEnv(gym.Env):
     (``gym.make("EKFSLAM-Large-v0", config={"world": {"n_landmarks": 40}})`` keeps the Large rooms and 1000
     steps), or a complete ``EnvConfig``, used as it is; ``preset=None`` starts from the defaults instead of the
     id's preset, and ``EKFSLAMEnv(preset="EKFSLAM-Large-v0")`` builds an id's configuration without
-    ``gym.make``. ``overrides`` are sections applied on top, e.g. ``world={"n_landmarks": 50},
+    ``gym.make``; ``tier`` picks a family id's difficulty (its world and horizon). ``overrides`` are sections
+    applied on top, e.g. ``world={"n_landmarks": 50},
     reward={"collision": 2.0}, filter={"motion_model": "odometry"}`` (``ekfslam_gym.filter.FilterSettings``). A
     bad value raises ``ValueError`` naming the field. ``render_mode``: ``rgb_array`` or ``human``.
 
@@ -127,6 +131,10 @@ class EKFSLAMEnv(gym.Env):
     - ``EKFSLAM-v0``: 20 x 20 m arena, 30 landmarks, 500 steps of 0.1 s.
     - ``EKFSLAM-Loop-v0``: a corridor ring (the loop layout), 30 landmarks, 800 steps: closing the loop pays.
     - ``EKFSLAM-Large-v0``: 40 x 40 m rooms, 120 landmarks, 1000 steps.
+    - ``EKFSLAM-v1``, ``EKFSLAM-Loop-v1``, ``EKFSLAM-Large-v1`` and a ``EKFSLAM-<Family>-v1`` per layout family
+      (``tier="easy" | "medium" | "hard"``, default medium), and ``EKFSLAM-Mix-v1`` (a training family and tier
+      drawn at every reset): a fixed horizon in simulated time, the filter's initial draw on
+      (``ekfslam_gym.envs.presets`` describes each, with its version history).
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 10}
