@@ -51,7 +51,10 @@ START, END = "<!-- info-keys:start -->", "<!-- info-keys:end -->"
 FIELD_NOTES: dict[str, tuple[str, str]] = {
     "world.layout": ("", "the layout generator, run anew at every reset"),
     "world.n_landmarks": ("", "the exact number of point landmarks"),
-    "world.layout_kwargs": ("m", "keyword arguments of the generator, e.g. `{width: 40.0, height: 40.0}`"),
+    "world.layout_kwargs": (
+        "m",
+        "keyword arguments of the generator, e.g. `{width: 40.0, height: 40.0}`; each layout's below",
+    ),
     "robot.radius": ("m", "the robot's body"),
     "robot.mass": ("kg", "the robot's body"),
     "robot.v_max": ("m/s", "forward speed at action 1.0"),
@@ -379,7 +382,31 @@ def render_configuration() -> str:
             f"| `{name}` | `{_cell(_yaml_value(value))}` | {unit} | {_cell(allowed_values(name, value))} "
             f"| {_cell(note)} |"
         )
+    lines += render_layout_keywords()
     return "\n".join(lines).replace("\n\n\n", "\n\n") + "\n"
+
+
+def render_layout_keywords() -> list[str]:
+    """The keywords of every layout (``world.layout_kwargs``), from each generator's signature and docstring."""
+    import inspect
+
+    from ekfslam_gym.sim import LAYOUTS, layout_keywords
+
+    lines = [
+        "",
+        "## Layout keywords (`world.layout_kwargs`)",
+        "",
+        "What each `world.layout` takes in `world.layout_kwargs`, read from its generator's signature and "
+        "docstring. A key the layout does not take, or a value of the wrong kind, raises `ValueError` naming "
+        "`world.layout_kwargs.<key>` when the config is built; the layout is drawn once then too, so a value the "
+        "generator refuses raises there as well. [Layouts](layouts.md) shows each family at each tier.",
+    ]
+    for name in LAYOUTS:
+        lines += ["", f"### `{name}`", "", "| key | default | meaning |", "|---|---|---|"]
+        for key, (default, meaning) in layout_keywords(name).items():
+            shown = "required" if default is inspect.Parameter.empty else f"`{_cell(_yaml_value(default))}`"
+            lines.append(f"| `{key}` | {shown} | {_cell(meaning)} |")
+    return lines
 
 
 def render_default_yaml() -> str:

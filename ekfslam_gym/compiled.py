@@ -72,6 +72,7 @@ KERNELS: dict[str, tuple[str, str, str]] = {
         "connected_component",
         "b1[:, ::1](b1[:, ::1], i8, i8)",
     ),
+    "free_cells": ("ekfslam_gym.sim.geometry", "free_cells", f"b1[:, ::1]({_F8_2}, f8, f8, f8, i8, i8, f8)"),
     "odometry_reading": (
         "ekfslam_gym.sim.odometry_kernels",
         "odometry_reading",
