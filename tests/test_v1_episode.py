@@ -16,7 +16,11 @@ from ekfslam_gym.envs.presets import PRESETS
 
 V1_IDS = sorted(i for i in PRESETS if i.endswith("-v1"))
 # A small world whose map the frontier planner completes in seconds: 12 landmarks, done_std 0.2 m.
-SMALL = {"world": {"n_landmarks": 12, "layout_kwargs": {"width": 14.0, "height": 14.0}}, "done_std": 0.2}
+SMALL = {
+    "world": {"n_landmarks": 12, "layout_kwargs": {"width": 14.0, "height": 14.0}},
+    "done_std": 0.2,
+    "episode_time": 50.0,
+}
 
 
 def _time_limits(env: gym.Env) -> list[int]:
@@ -123,21 +127,23 @@ def test_time_to_complete_is_inf_until_the_map_is_complete_then_the_time_it_firs
 @pytest.mark.parametrize(
     "action, env_steps",
     [
-        ({"kind": "velocity"}, 500),
-        ({"kind": "velocity", "hold": 4}, 125),
-        ({"kind": "primitives"}, 50),
-        ({"kind": "primitives", "hold": 5}, 100),
-        ({"kind": "waypoint"}, 50),
+        ({"kind": "velocity"}, 1500),
+        ({"kind": "velocity", "hold": 4}, 375),
+        ({"kind": "primitives"}, 150),
+        ({"kind": "primitives", "hold": 7}, 215),  # 7 does not divide 1500: the last step runs 5 past
+        ({"kind": "waypoint"}, 150),
     ],
 )
 def test_every_action_kind_gets_the_same_simulated_time(action, env_steps):
-    """EKFSLAM-v1 lasts 50 s of simulated time whatever the action kind: the env's limit, gym.make's and the
-    env built directly agree, and there is no TimeLimit unless one is asked for."""
+    """EKFSLAM-v1 lasts 150 s of simulated time (1500 control steps) whatever the action kind: the env's limit,
+    gym.make's and the env built directly agree, and there is no TimeLimit unless one is asked for."""
     env = gym.make("EKFSLAM-v1", action=action)
     direct = EKFSLAMEnv(preset="EKFSLAM-v1", action=action)
+    assert env.unwrapped.config.episode_time == 150.0
     assert env.unwrapped._max_steps == direct._max_steps == env_steps
     assert env.spec.max_episode_steps is None and _time_limits(env) == []
-    assert env_steps * env.unwrapped.config.action.hold == 500
+    hold = env.unwrapped.config.action.hold
+    assert 0 <= env_steps * hold - 1500 < hold
     if action["kind"] != "waypoint":  # a waypoint's macro step may end early, when its goal is reached
         obs, _ = env.reset(seed=0)
         flags = []
@@ -147,7 +153,7 @@ def test_every_action_kind_gets_the_same_simulated_time(action, env_steps):
             if terminated or truncated:
                 break
         assert flags == [False] * (env_steps - 1) + [True]
-        assert info["step"] == 500 and _time_left(env, obs) == 0.0
+        assert info["step"] == env_steps * hold and _time_left(env, obs) == 0.0
 
 
 @pytest.mark.parametrize("limit", [50, 500, 37])
@@ -171,6 +177,8 @@ def test_a_step_limit_in_the_config_or_a_time_is_the_users_and_two_different_one
     assert env.unwrapped._max_steps == 500 and _time_limits(env) == []
     timed = gym.make("EKFSLAM-v1", episode_time=20.0, action={"kind": "primitives"})
     assert timed.unwrapped._max_steps == 20
+    hard = gym.make("EKFSLAM-v1", tier="hard", action={"kind": "primitives"})
+    assert hard.unwrapped._max_steps == 330
     same = gym.make("EKFSLAM-v1", max_episode_steps=30, config={"max_episode_steps": 30})
     assert same.unwrapped._max_steps == 30
     with pytest.raises(ValueError, match="two step limits"):

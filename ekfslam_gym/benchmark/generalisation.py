@@ -5,9 +5,10 @@ The shipped policies were each trained on one v0 id; here they run zero-shot (wi
 observation settings they were trained with, on the v1 id's world, filter and horizon), which measures what
 specialising on one layout costs on others. The cases:
 
-- ``layout``: ``EKFSLAM-v1``, ``EKFSLAM-Loop-v1`` and ``EKFSLAM-Large-v1`` on the held-out suite's seeds;
-- ``training family``: each training family's id at its default tier, on that family's held-out seeds;
-- ``held-out family``: each held-out family's id at its default tier, on its seeds.
+- ``training family``: each training family's id (``EKFSLAM-v1`` is the arena family's, ``EKFSLAM-Loop-v1``
+  the loop's) at its default tier, on that family's held-out seeds (``ekfslam_gym.seeds.family_seeds``);
+- ``held-out family``: each held-out family's id at its default tier, on its seeds;
+- ``large``: ``EKFSLAM-Large-v1`` on the held-out suite's seeds.
 
 Every episode is one row of a CSV that the run appends to as it goes (``run(csv_path=...)`` skips the rows it
 already holds, so a long run that was stopped resumes); the tables are made from the CSV alone. A ``--quick``
@@ -38,13 +39,22 @@ SUITE_METRICS: tuple[str, ...] = (
 """The table's columns, from ``ekfslam_gym.evaluation.episode_metrics`` (collisions: control steps in contact
 with a wall, the wall contacts)."""
 
-LOWER_IS_BETTER = {"map_log_det", "landmark_rmse", "time_to_complete", "collisions"}
+ARROWS = {
+    "map_log_det": " ↓",
+    "landmark_rmse": " ↓",
+    "seen_fraction": " ↑",
+    "time_to_complete": " ↓",
+    "collisions": " ↓",
+}
+"""Which way is better, for the table's header (path length is neither: it is what the map cost)."""
 SEEDS_PER_CASE = 10
 """Seeds per case in a full run: the first of each case's held-out seeds."""
 QUICK_EPISODE_TIME = 2.0
 """s of simulated time per episode in a ``--quick`` run (one seed per case)."""
-LAYOUT_IDS: tuple[str, ...] = ("EKFSLAM-v1", "EKFSLAM-Loop-v1", "EKFSLAM-Large-v1")
-SPLITS: tuple[str, ...] = ("layout", "training family", "held-out family")
+LAYOUT_IDS: tuple[str, ...] = ("EKFSLAM-Large-v1",)
+"""The v1 layout ids that are no family's (the family ids, ``EKFSLAM-v1`` and ``EKFSLAM-Loop-v1`` among them,
+come from ``ekfslam_gym.sim.families``)."""
+SPLITS: tuple[str, ...] = ("training family", "held-out family", "large")
 ROW_KEYS: tuple[str, ...] = ("agent", "kind", "case", "split", "seed", "steps", "return", *SUITE_METRICS)
 
 
@@ -76,25 +86,26 @@ class Contender:
 
 
 def cases(seeds_per_case: int = SEEDS_PER_CASE) -> list[Case]:
-    """Every case of the suite, with its first ``seeds_per_case`` held-out seeds."""
+    """Every case of the suite, each with its first ``seeds_per_case`` held-out seeds: the family ids, then
+    ``EKFSLAM-Large-v1``."""
     from ..seeds import HELD_OUT_SEEDS
 
-    found = [Case(env_id, None, "layout", HELD_OUT_SEEDS[:seeds_per_case]) for env_id in LAYOUT_IDS]
-    found += family_cases(seeds_per_case)
+    found = family_cases(seeds_per_case)
+    found += [Case(env_id, None, "large", HELD_OUT_SEEDS[:seeds_per_case]) for env_id in LAYOUT_IDS]
     return found
 
 
 def family_cases(seeds_per_case: int) -> list[Case]:
-    """The family ids' cases, training families first (``ekfslam_gym.seeds`` holds the split and the seeds)."""
-    from ..envs.presets import DEFAULT_TIER, FAMILY_IDS
-    from ..seeds import HELDOUT_FAMILIES, TRAINING_FAMILIES, family_heldout_seeds
+    """The family ids' cases at their default tier, training families first (``ekfslam_gym.seeds`` holds the
+    split and each family's held-out seeds)."""
+    from ..envs.presets import DEFAULT_TIER, family_id
+    from ..seeds import HELDOUT_FAMILIES, TRAINING_FAMILIES, family_seeds
 
-    ids = {family: env_id for env_id, family in FAMILY_IDS.items()}
     found = []
     for split, families in (("training family", TRAINING_FAMILIES), ("held-out family", HELDOUT_FAMILIES)):
         for family in families:
-            seeds = tuple(family_heldout_seeds(family))[:seeds_per_case]
-            found.append(Case(ids[family], DEFAULT_TIER, split, seeds))
+            seeds = tuple(family_seeds(family).heldout)[:seeds_per_case]
+            found.append(Case(family_id(family), DEFAULT_TIER, split, seeds))
     return found
 
 
@@ -137,31 +148,38 @@ def run(
     progress: Callable[[str], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Run every contender on every case's seeds; the episode rows (``ROW_KEYS``), each appended to
-    ``csv_path`` as it finishes (rows the file already holds are not run again). ``episode_time`` (s) cuts
-    every episode short (``--quick``)."""
+    ``csv_path`` as it finishes (rows the file already holds are not run again). Seed by seed: every contender
+    on every case with its first seed, then with its second, ..., so that a run stopped early has as many
+    seeds for every row of the table. ``episode_time`` (s) cuts every episode short (``--quick``)."""
     from ..evaluation.rollout import evaluate_agent
 
     done = _done(csv_path)
+    built: dict[str, tuple[Any, Mapping[str, Any]]] = {}
     rows: list[dict[str, Any]] = []
-    for contender in agents:
-        todo = [
-            (case, s) for case in suite for s in case.seeds if (contender.label, case.name, s) not in done
-        ]
-        if not todo:
-            continue
-        agent, settings = contender.build()
-        for case, seed in todo:
-            kwargs = {**settings, **case.env_kwargs()}
-            if episode_time is not None:
-                kwargs["episode_time"] = episode_time
-            (episode,) = evaluate_agent(agent, case.env_id, [seed], kwargs, label=contender.label)
-            row = {"agent": contender.label, "kind": contender.kind, "case": case.name, "split": case.split,
-                   **{key: episode[key] for key in ("seed", "steps", "return", *SUITE_METRICS)}}  # fmt: skip
-            rows.append(row)
-            if csv_path is not None:
-                _append(csv_path, row)
-            if progress is not None:
-                progress(f"{contender.label} on {case.name}, seed {seed}: seen {row['seen_fraction']:.2f}")
+    for index in range(max((len(case.seeds) for case in suite), default=0)):
+        for case in suite:
+            if index >= len(case.seeds):
+                continue
+            seed = case.seeds[index]
+            for contender in agents:
+                if (contender.label, case.name, seed) in done:
+                    continue
+                if contender.label not in built:
+                    built[contender.label] = contender.build()
+                agent, settings = built[contender.label]
+                kwargs = {**settings, **case.env_kwargs()}
+                if episode_time is not None:
+                    kwargs["episode_time"] = episode_time
+                (episode,) = evaluate_agent(agent, case.env_id, [seed], kwargs, label=contender.label)
+                row = {"agent": contender.label, "kind": contender.kind, "case": case.name, "split": case.split,
+                       **{key: episode[key] for key in ("seed", "steps", "return", *SUITE_METRICS)}}  # fmt: skip
+                rows.append(row)
+                if csv_path is not None:
+                    _append(csv_path, row)
+                if progress is not None:
+                    progress(
+                        f"{contender.label} on {case.name}, seed {seed}: seen {row['seen_fraction']:.2f}"
+                    )
     return rows
 
 
@@ -216,7 +234,7 @@ def _cell(metric: Mapping[str, Any]) -> str:
 
 
 def _table(by_agent: Mapping[str, Any], keys: Sequence[str] = SUITE_METRICS) -> list[str]:
-    header = ["agent", "episodes", *(f"{k} {'↓' if k in LOWER_IS_BETTER else '↑'}" for k in keys)]
+    header = ["agent", "episodes", *(f"{k}{ARROWS.get(k, '')}" for k in keys)]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for agent, result in by_agent.items():
         cells = [agent, str(result["episodes"]), *(_cell(result["metrics"][k]) for k in keys)]

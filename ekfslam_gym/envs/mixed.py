@@ -22,10 +22,11 @@ from .presets import TIER_EPISODE_TIME, TIERS
 
 
 class MixedFamiliesEnv(EKFSLAMEnv):
-    """``EKFSLAMEnv`` whose world is drawn at every reset: a family of ``families`` (default the training
-    families, ``ekfslam_gym.seeds.TRAINING_FAMILIES``) and a tier of ``tiers`` (default all three), uniformly,
-    from the reset's seed; then the family's layout at that tier (``ekfslam_gym.sim.families.world_section``),
-    for the tier's horizon (``TIER_EPISODE_TIME``) unless a step limit is given.
+    """``EKFSLAMEnv`` whose world is drawn at every reset: a family of ``families`` (training families only,
+    default all of them, ``ekfslam_gym.seeds.TRAINING_FAMILIES``) and a tier of ``tiers`` (default all three),
+    uniformly, from the reset's seed; then the family's layout at that tier
+    (``ekfslam_gym.sim.families.world_section``), for the tier's horizon (``TIER_EPISODE_TIME``) unless a step
+    limit is given.
 
     The config's ``world`` section is not used (the draw replaces it); everything else is the config's.
     ``family`` and ``tier`` say what the last reset drew.
@@ -41,14 +42,18 @@ class MixedFamiliesEnv(EKFSLAMEnv):
         tiers: Sequence[str] = TIERS,
         **overrides: Any,
     ) -> None:
-        from ..seeds import TRAINING_FAMILIES
-        from ..sim.families import FAMILIES, world_section
+        from ..seeds import TRAINING_FAMILIES, check_training_family
+        from ..sim.families import world_section
 
         super().__init__(config, render_mode, preset=preset, **overrides)
         families = tuple(TRAINING_FAMILIES if families is None else families)
         tiers = tuple(tiers)
-        if not families or any(f not in FAMILIES for f in families):
-            raise ValueError(f"families must be a non-empty list of {', '.join(FAMILIES)}, got {families!r}")
+        if not families or any(f not in TRAINING_FAMILIES for f in families):
+            for family in families:
+                check_training_family(family, "the mixed env's families")  # names a held-out family
+            raise ValueError(
+                f"families must be a non-empty list of {', '.join(TRAINING_FAMILIES)}, got {families!r}"
+            )
         if not tiers or any(t not in TIERS for t in tiers):
             raise ValueError(f"tiers must be a non-empty list of {', '.join(TIERS)}, got {tiers!r}")
         self._draws = tuple((f, t) for f in families for t in tiers)
