@@ -167,7 +167,7 @@ def test_step_before_reset_is_an_error():
     [
         (dict(sensor={"max_range": -1.0}), "max_range"),
         (dict(world={"n_landmarks": 0}), "world.n_landmarks"),
-        (dict(world={"layout": "maze"}), "world.layout"),
+        (dict(world={"layout": "castle"}), "world.layout"),
         (dict(reward={"info_gan": 1.0}), "reward.info_gan"),
         (dict(filter={"landmark_prior": "big"}), "filter.landmark_prior"),
         (dict(max_episode_steps=0), "max_episode_steps"),

@@ -13,6 +13,7 @@ height).
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 import os
@@ -295,14 +296,20 @@ def layout_keywords(name: str) -> dict[str, tuple[Any, str]]:
     if name not in LAYOUTS:
         raise ValueError(f"unknown layout {name!r}; choose one of {sorted(LAYOUTS)}")
     generator = LAYOUTS[name]
+    return dict(_keywords(name, generator))
+
+
+@functools.cache
+def _keywords(name: str, generator: Callable[..., Layout]) -> tuple[tuple[str, tuple[Any, str]], ...]:
+    """``layout_keywords``' pairs, read once per generator (every config build checks against them)."""
     notes = {**COMMON_KEYWORDS, **_documented(generator)}
-    keywords: dict[str, tuple[Any, str]] = {}
+    keywords = []
     for parameter in inspect.signature(generator).parameters.values():
         if parameter.kind is inspect.Parameter.KEYWORD_ONLY:
             if parameter.name not in notes:
                 raise RuntimeError(f"layout {name!r}: keyword {parameter.name!r} is not documented")
-            keywords[parameter.name] = (parameter.default, notes[parameter.name])
-    return keywords
+            keywords.append((parameter.name, (parameter.default, notes[parameter.name])))
+    return tuple(keywords)
 
 
 def check_layout_kwargs(name: str, kwargs: Mapping[str, Any], field: str = "world.layout_kwargs") -> None:
