@@ -86,7 +86,7 @@ _V1_CHANGES = (
     "map: ``info['time_to_complete']`` says when it was); the filter's initial pose drawn from its prior "
     "(``filter.initial_draw``); ``tier=`` picks the family's easy, medium or hard world"
 )
-_V1_NEW = Release("v1", "0.3.0", f"new: {_V1_CHANGES}")
+_V1_NEW = Release("v1", "0.3.0", f"new, with every v1 id: {_V1_CHANGES}")
 
 _FAMILY_LINES = {
     "arena": "an open rectangle",
@@ -101,16 +101,16 @@ _FAMILY_LINES = {
 
 DESCRIPTIONS: dict[str, str] = {
     "EKFSLAM-v0": "20 x 20 m arena, 30 landmarks, 500 steps of 0.1 s.",
-    "EKFSLAM-Loop-v0": "a corridor ring (the loop layout), 30 landmarks, 800 steps: closing the loop pays.",
+    "EKFSLAM-Loop-v0": "A corridor ring (the loop layout), 30 landmarks, 800 steps: closing the loop pays.",
     "EKFSLAM-Large-v0": "40 x 40 m rooms, 120 landmarks, 1000 steps.",
     **{
-        env_id: f"the {family} family, {_FAMILY_LINES[family]}; tier easy, medium (default) or hard, "
+        env_id: f"The {family} family, {_FAMILY_LINES[family]}; tier easy, medium (default) or hard, "
         f"{', '.join(f'{TIER_EPISODE_TIME[t]:g}' for t in TIERS)} s."
         for env_id, family in FAMILY_IDS.items()
     },
     "EKFSLAM-Large-v1": "40 x 40 m rooms, 120 landmarks, 600 s: long enough for the frontier planner to see "
     "at least 90 % of the landmarks.",
-    MIX_ID: "a training family and a tier drawn at every reset, for training policies that generalise; the "
+    MIX_ID: "A training family and a tier drawn at every reset, for training policies that generalise; the "
     "tier's horizon.",
 }
 """One line per id: what its world and horizon are."""
