@@ -242,10 +242,20 @@ def _table(by_agent: Mapping[str, Any], keys: Sequence[str] = SUITE_METRICS) -> 
     return lines
 
 
+INTRO = (
+    "Does a policy explore and close loops, or has it learned one layout? Every baseline planner and every "
+    "shipped policy runs on worlds of every layout family: the training families on held-out seeds (worlds "
+    "never trained on, of families a generalist may train on), the held-out families (warehouse, and maze, "
+    "unlike every training family), and the Large rooms. The shipped policies are specialists, each trained "
+    "on one v0 id: the gap between their rows and the planners' on worlds they never saw is what "
+    "specialising costs. The first table pools every episode of a split; the tables by env follow."
+)
+
+
 def markdown(summary: Mapping[str, Any], *, about: str) -> str:
     """The suite's tables: one per split (every episode of it pooled), then one per case; ``about`` (the
     protocol: seeds, versions, command) goes under the title."""
-    lines = ["# Generalisation", "", about, "", "## By split", ""]
+    lines = ["# Generalisation", "", INTRO, "", about, "", "## By split", ""]
     for split, by_agent in summary["splits"].items():
         lines += [f"### {split}", "", *_table(by_agent), ""]
     lines += ["## By env", ""]
@@ -254,46 +264,57 @@ def markdown(summary: Mapping[str, Any], *, about: str) -> str:
     return "\n".join(lines)
 
 
-def about(rows: Sequence[Mapping[str, Any]], quick: bool) -> str:
+def about(rows: Sequence[Mapping[str, Any]], quick: bool, seeds_per_case: int) -> str:
     """The protocol paragraph of the page: seeds per case, horizon, versions, the command that made it."""
     from .. import __version__
 
-    per_case = max((sum(1 for r in rows if r["case"] == c and r["agent"] == rows[0]["agent"])
-                    for c in _ordered(r["case"] for r in rows)), default=0)  # fmt: skip
-    command = "ekfslam-benchmark --suite generalisation" + (" --quick" if quick else "") + " --out DIR"
+    command = "ekfslam-benchmark --suite generalisation" + (" --quick" if quick else "")
+    if seeds_per_case != (1 if quick else SEEDS_PER_CASE):
+        command += f" --suite-seeds {seeds_per_case}"
+    agents = _ordered(r["agent"] for r in rows)
     text = (
-        f"Made by `{command}` (ekfslam-gym {__version__}): {per_case} held-out seed(s) per env, the first of "
-        "each env's held-out seeds (`ekfslam_gym.seeds`), every episode its id's full horizon; IQM [95 % "
-        "bootstrap CI] over the episodes. The shipped policies, each trained on one v0 id, run zero-shot with "
-        "the action interface and observation settings they were trained with. `time_to_complete` is the "
-        "simulated time until every landmark's sigma was below `done_std` (the episode's length if never); "
-        "`collisions` counts control steps in contact with a wall. Per-episode rows: `generalisation.csv`."
+        f"Made by `{command} --out docs/results` (ekfslam-gym {__version__}, {len(rows)} episodes): "
+        f"{seeds_per_case} held-out seed(s) per env, the first of each env's held-out seeds "
+        f"(`ekfslam_gym.seeds`), {len(agents)} agents, every episode its id's full horizon at the default tier "
+        "(medium); IQM [95 % bootstrap CI] over the episodes. The shipped policies, each trained on one v0 id, run "
+        "zero-shot with the action interface and observation settings they were trained with. "
+        "`time_to_complete` is the simulated time (s) until every landmark's sigma was below `done_std` (the "
+        "episode's length if never); `collisions` counts control steps in contact with a wall; `path_length` "
+        "is in m. Per-episode rows: `generalisation.csv`."
     )
     if quick:
-        text += (f"\n\n**A quick run**: one seed per env, each episode cut to {QUICK_EPISODE_TIME} s. A check "
-                 "that the suite runs, not a result.")  # fmt: skip
+        text += (f"\n\n**A quick run**: each episode cut to {QUICK_EPISODE_TIME} s. A check that the suite runs, "
+                 "not a result.")  # fmt: skip
     return text
 
 
 def run_suite(
-    *, quick: bool = False, out: Path | None = None, progress: Callable[[str], None] | None = None
+    *,
+    quick: bool = False,
+    seeds_per_case: int | None = None,
+    out: Path | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> str:
-    """The whole suite (``--quick``: one seed per case, short episodes): runs what ``out/generalisation.csv``
-    does not hold yet, writes ``generalisation.md`` and ``generalisation.json`` beside it, and returns the
-    Markdown."""
+    """The whole suite with ``seeds_per_case`` seeds per case (default ``SEEDS_PER_CASE``; ``--quick``: one
+    seed, short episodes): runs what ``out/generalisation.csv`` does not hold yet, writes ``generalisation.md``
+    and ``generalisation.json`` beside it from the CSV's rows of these seeds, and returns the Markdown."""
     import json
 
     from ..evaluation.report import json_safe
 
-    suite = cases(1 if quick else SEEDS_PER_CASE)
+    if seeds_per_case is None:
+        seeds_per_case = 1 if quick else SEEDS_PER_CASE
+    if seeds_per_case < 1:
+        raise ValueError(f"seeds_per_case must be >= 1, got {seeds_per_case}")
+    suite = cases(seeds_per_case)
     csv_path = None if out is None else Path(out) / "generalisation.csv"
     rows = run(suite, contenders(), csv_path=csv_path, episode_time=QUICK_EPISODE_TIME if quick else None,
                progress=progress)  # fmt: skip
     if csv_path is not None:
-        wanted = {c.name for c in suite}
-        rows = [r for r in read_rows(csv_path) if r["case"] in wanted]
+        wanted = {(c.name, seed) for c in suite for seed in c.seeds}
+        rows = [r for r in read_rows(csv_path) if (r["case"], r["seed"]) in wanted]
     summary = summarise(rows)
-    text = markdown(summary, about=about(rows, quick))
+    text = markdown(summary, about=about(rows, quick, seeds_per_case))
     if out is not None:
         Path(out, "generalisation.md").write_text(text)
         Path(out, "generalisation.json").write_text(json.dumps(json_safe(summary), indent=1, allow_nan=False))

@@ -52,6 +52,8 @@ def _build_parser() -> argparse.ArgumentParser:
                         help="generalisation: every baseline and shipped policy on every v1 layout id, the "
                              "training families' held-out seeds and the held-out families (no --agent; --out "
                              "DIR keeps a CSV of the episodes, and a run stopped early resumes from it)")  # fmt: skip
+    parser.add_argument("--suite-seeds", type=int, default=None,
+                        help="held-out seeds per env of the suite (default 10; --quick: 1)")  # fmt: skip
     return parser
 
 
@@ -132,7 +134,9 @@ def _suite(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         parser.error("--suite runs every baseline and shipped policy on its own envs: leave out --agent, "
                      "--model and --env-ids")  # fmt: skip
     report = None if args.no_progress else (lambda line: print(line, file=sys.stderr, flush=True))
-    print(run_suite(quick=args.quick, out=args.out, progress=report), end="")
+    if args.suite_seeds is not None and args.suite_seeds < 1:
+        parser.error(f"--suite-seeds must be >= 1, got {args.suite_seeds}")
+    print(run_suite(quick=args.quick, seeds_per_case=args.suite_seeds, out=args.out, progress=report), end="")
     return 0
 
 
