@@ -227,7 +227,7 @@ def test_config_merges_onto_the_ids_preset_and_replacing_it_is_asked_for(tmp_pat
     assert gym.make("EKFSLAM-Large-v0", config=complete).unwrapped.config == complete
     assert EKFSLAMEnv(preset="EKFSLAM-Large-v0").config == large
     assert EKFSLAMEnv().config == EnvConfig()
-    with pytest.raises(ValueError, match=r"unknown preset 'EKFSLAM-Huge-v0'; known: \['EKFSLAM-Large-v0'"):
+    with pytest.raises(ValueError, match=r"unknown preset 'EKFSLAM-Huge-v0'; known: \[.*'EKFSLAM-Large-v0'"):
         EKFSLAMEnv(preset="EKFSLAM-Huge-v0")
 
 
