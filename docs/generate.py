@@ -122,10 +122,19 @@ FIELD_NOTES: dict[str, tuple[str, str]] = {
         "env steps",
         "the step limit (truncation, and the time-left entry's horizon); null: from episode_time",
     ),
-    "episode_time": ("s", "the episode's simulated time when max_episode_steps is null, for every action kind"),
+    "episode_time": (
+        "s",
+        "the episode's simulated time when max_episode_steps is null, for every action kind",
+    ),
     "terminate_on_collision": ("", "end the episode at the first wall contact"),
-    "done_std": ("m", "the map is complete once every landmark's standard deviation is below this (0: never)"),
-    "terminate_on_complete": ("", "end the episode once the map is complete (v0; the v1 ids run to their horizon)"),
+    "done_std": (
+        "m",
+        "the map is complete once every landmark's standard deviation is below this (0: never)",
+    ),
+    "terminate_on_complete": (
+        "",
+        "end the episode once the map is complete (v0; the v1 ids run to their horizon)",
+    ),
     "loop_gap": (
         "steps",
         "a landmark re-read after at least this many steps unseen counts as a loop closure",
@@ -453,9 +462,12 @@ def render_env_page(env_id: str) -> str:
 
     import ekfslam_gym  # noqa: F401
     from ekfslam_gym.envs import PRESETS, EKFSLAMEnv, EnvConfig
+    from ekfslam_gym.envs.presets import DESCRIPTIONS
 
     doc = inspect.cleandoc(EKFSLAMEnv.__doc__ or "")
     described = re.search(rf"``{re.escape(env_id)}``: (.*?)(?=\n- ``|\Z)", doc, re.S)
+    description = described.group(1) if described else DESCRIPTIONS[env_id]
+    picture = (DOCS / "images" / f"{env_id}.png").is_file()
     env = gym.make(env_id)
     config = env.unwrapped.config
     default = EnvConfig()
@@ -469,10 +481,9 @@ def render_env_page(env_id: str) -> str:
             source=f"EKFSLAMEnv's docstring, PRESETS['{env_id}'] and models/ppo_{env_id}_config.yaml"
         ),
         "",
-        " ".join((described.group(1) if described else "").split()),
+        " ".join(description.split()),
         "",
-        f"![{env_id}: the robot's belief mid-episode](../images/{env_id}.png)",
-        "",
+        *([f"![{env_id}: the robot's belief mid-episode](../images/{env_id}.png)", ""] if picture else []),
         "```python",
         "import gymnasium as gym",
         "import ekfslam_gym  # noqa: F401",
@@ -485,7 +496,9 @@ def render_env_page(env_id: str) -> str:
         "|---|---|",
         f"| observation space | `{_cell(env.observation_space)}` |",
         f"| action space | `{_cell(env.action_space)}` |",
-        f"| step limit | {env.spec.max_episode_steps} env steps of {config.dt} s |",
+        f"| step limit | {env.spec.max_episode_steps} env steps of {config.dt} s |"
+        if env.spec.max_episode_steps is not None
+        else f"| episode length | {config.episode_time:g} s of simulated time ({config.dt} s a control step) |",
         f"| landmarks | {config.world.n_landmarks} |",
         f"| layout | `{config.world.layout}` {_cell(dict(config.world.layout_kwargs) or '')} |",
         "",
@@ -570,7 +583,9 @@ def outputs() -> dict[Path, Any]:
         BELIEF_PAGE: render_belief_page,
         VERSIONS_PAGE: render_version_history,
     }
-    for env_id in ENV_IDS:
+    from ekfslam_gym.envs.presets import PRESETS
+
+    for env_id in PRESETS:  # every registered id (ENV_IDS: those with a shipped policy)
         files[DOCS / "envs" / f"{env_id}.md"] = lambda env_id=env_id: render_env_page(env_id)
     return files
 
