@@ -89,16 +89,18 @@ def test_structured_families_draw_their_walls(family: str) -> None:
     assert len(walls) == 4
 
 
-def test_tiers_grow_and_occlude_more() -> None:
+def test_tiers_grow_thin_out_and_occlude_more() -> None:
     for family in FAMILIES:
-        areas, walls = [], []
+        areas, walls, density = [], [], []
         for tier in TIERS:
             layout = _layout(family, tier, 0)
             xmin, ymin, xmax, ymax = layout.bounds
             areas.append((xmax - xmin) * (ymax - ymin))
             walls.append(len(layout.walls))
+            density.append(layout.n_landmarks / areas[-1])
         assert areas[0] < areas[1] < areas[2], family
         assert walls[0] <= walls[1] <= walls[2], family
+        assert density[0] > density[1] > density[2], family
 
 
 def test_maze_is_a_tree_of_corridors() -> None:
@@ -152,6 +154,32 @@ def test_an_episode_runs_on_the_hard_tier(family: str) -> None:
     env.close()
 
 
+@pytest.mark.parametrize(
+    ("name", "kwargs", "message"),
+    [
+        ("pillars", {"pillar_size": 2.5}, "pillar_size must be in"),
+        ("pillars", {"gap": 0.4}, "gap .* too narrow"),
+        ("pillars", {"n_pillars": 400}, "could place only"),
+        ("figure_eight", {"corridor": 1.5}, "too narrow"),
+        ("figure_eight", {"width": 12.0}, "leaves no blocks"),
+        ("office", {"rooms_per_side": 20}, "no room for 20 rooms"),
+        ("office", {"door_width": 0.5}, "door_width .* too narrow"),
+        ("office", {"jitter": 0.5}, "jitter must be in"),
+        ("warehouse", {"n_rows": 14}, "aisle between rows"),
+        ("warehouse", {"shelf_depth": 3.0}, "shelf_depth must be in"),
+        ("warehouse", {"n_cross": 8}, "shelves under 1 m"),
+        ("warehouse", {"end_aisle": 1.0}, "end_aisle"),
+        ("maze", {"cell": 1.5}, "cell must be >= 2"),
+        ("maze", {"cell": 12.0}, "at least 2 x 2 cells"),
+        ("maze", {"braid": 1.0}, "braid must be in"),
+        ("maze", {"width": float("nan")}, "width and height must be finite"),
+    ],
+)
+def test_bad_family_keywords_raise_before_anything_is_drawn(name: str, kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        make_layout(name, np.random.default_rng(0), 10, **kwargs)
+
+
 # ---------------------------------------------------------------------------------------- the free grid
 def test_free_cells_equals_brute_force_distances() -> None:
     rng = np.random.default_rng(0)
@@ -198,7 +226,26 @@ def test_a_layout_keyword_of_the_wrong_kind_fails_when_the_config_is_built() -> 
         EnvConfig.from_overrides(world={"layout": "rooms", "layout_kwargs": {"n_rooms_x": 2.5}})
     with pytest.raises(ValueError, match=r"world\.layout_kwargs\.width must be a number"):
         EnvConfig.from_overrides(world={"layout": "maze", "layout_kwargs": {"width": "wide"}})
-    EnvConfig.from_overrides(world={"layout": "maze", "layout_kwargs": {"width": 24}})  # an int for a float
+    with pytest.raises(ValueError, match=r"world\.layout_kwargs\.yaml must be a string"):
+        EnvConfig.from_overrides(world={"layout": "map_server", "layout_kwargs": {"yaml": Path("map.yaml")}})
+    # an int where a number is due, numpy scalars and arrays: held as plain Python values (YAML-safe)
+    config = EnvConfig.from_overrides(
+        world={"layout": "maze", "layout_kwargs": {"width": 24, "cell": np.float64(3)}}
+    )
+    assert config.world.layout_kwargs == {"width": 24.0, "cell": 3.0}
+    assert (
+        type(config.world.layout_kwargs["width"]) is float
+        and type(config.world.layout_kwargs["cell"]) is float
+    )
+    surveyed = {
+        "layout": "surveyed",
+        "n_landmarks": 2,
+        "layout_kwargs": {"landmarks": np.array([[1.0, 1.0], [3.0, 2.0]])},
+    }
+    assert EnvConfig.from_overrides(world=surveyed).world.layout_kwargs["landmarks"] == [
+        [1.0, 1.0],
+        [3.0, 2.0],
+    ]
 
 
 def test_a_value_the_generator_refuses_fails_when_the_config_is_built() -> None:
@@ -228,6 +275,15 @@ def test_the_split_is_fixed_disjoint_and_covers_every_family() -> None:
             check_training_family(family, "training envs")
     with pytest.raises(ValueError, match="unknown layout family"):
         family_seeds("castle")
+
+
+def test_a_training_run_refuses_a_held_out_family() -> None:
+    from ekfslam_gym.training.settings import SettingsError, validate_entry
+
+    entry = {"n_timesteps": 10, "env_kwargs": {"world": world_section("maze", "easy")}}
+    with pytest.raises(SettingsError, match="held-out layout family 'maze'"):
+        validate_entry(entry, env_id="EKFSLAM-v0")
+    validate_entry({**entry, "env_kwargs": {"world": world_section("office", "easy")}}, env_id="EKFSLAM-v0")
 
 
 def test_layouts_page_shows_every_family_at_every_tier() -> None:

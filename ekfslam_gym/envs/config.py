@@ -73,8 +73,7 @@ class WorldConfig:
             "must be a mapping",
             self.layout_kwargs,
         )
-        object.__setattr__(self, "layout_kwargs", dict(self.layout_kwargs))
-        check_layout_kwargs(self.layout, self.layout_kwargs)
+        object.__setattr__(self, "layout_kwargs", check_layout_kwargs(self.layout, self.layout_kwargs))
 
 
 def check_world(world: WorldConfig, robot_radius: float) -> None:

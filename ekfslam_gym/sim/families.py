@@ -3,8 +3,8 @@ tier, as data in one table.
 
 A family is a layout generator (its name is the ``world.layout``); a tier fixes its size, its landmark count
 and how much its walls hide. From ``easy`` to ``hard`` the worlds grow (about 15-20 m across, then 20-30 m,
-then 30-40 m), the landmarks thin out (about 0.08, 0.06 and 0.05 a square metre of the world) and the
-occluding structure grows (more pillars, rooms, shelf rows or maze cells). ``medium`` of ``arena`` and
+then 30-40 m), the landmarks thin out (about 0.08 a square metre of the world, then 0.06-0.075, then
+0.05-0.06) and the occluding structure grows (more pillars, rooms, shelf rows or maze cells). ``medium`` of ``arena`` and
 ``loop`` are EKFSLAM-v0's and EKFSLAM-Loop-v0's worlds. Which families are for training and which are held
 out is ``ekfslam_gym.seeds``' business (``TRAINING_FAMILIES``, ``HELDOUT_FAMILIES``).
 """
@@ -40,7 +40,7 @@ _TABLE: dict[str, dict[str, tuple[int, dict[str, Any]]]] = {
     "figure_eight": {
         "easy": (20, {"width": 22.0, "height": 12.0}),
         "medium": (30, {"width": 30.0, "height": 16.0}),
-        "hard": (50, {"width": 40.0, "height": 20.0}),
+        "hard": (45, {"width": 40.0, "height": 20.0}),
     },
     "office": {
         "easy": (20, {"width": 20.0, "height": 14.0, "rooms_per_side": 3}),

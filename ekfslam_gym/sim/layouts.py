@@ -16,7 +16,6 @@ from __future__ import annotations
 import functools
 import inspect
 import math
-import os
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -312,22 +311,32 @@ def _keywords(name: str, generator: Callable[..., Layout]) -> tuple[tuple[str, t
     return tuple(keywords)
 
 
-def check_layout_kwargs(name: str, kwargs: Mapping[str, Any], field: str = "world.layout_kwargs") -> None:
-    """ValueError naming ``<field>.<key>`` and the valid keys for a keyword layout ``name`` does not take, or
-    one whose value is not of its default's kind (a number, an integer, a string, a list, true or false)."""
+def check_layout_kwargs(
+    name: str, kwargs: Mapping[str, Any], field: str = "world.layout_kwargs"
+) -> dict[str, Any]:
+    """``kwargs`` checked against layout ``name``'s keywords, as plain Python values (an int where a number is
+    due becomes a float, an array a list), so a config holding them writes to YAML and compares equal.
+
+    ValueError naming ``<field>.<key>`` and the valid keys for a keyword the layout does not take, for one whose
+    value is not of its default's kind (a number, an integer, a string, a list, true or false), or for a
+    required one left out."""
     keywords = layout_keywords(name)
+    checked: dict[str, Any] = {}
     for key, value in kwargs.items():
         if key not in keywords:
             raise ValueError(
                 f"{field}.{key} is not a keyword of layout {name!r}; valid keys: {', '.join(keywords)}"
             )
         default = keywords[key][0]
-        if not _same_kind(value, default):
+        plain = _plain(value, default)
+        if plain is None:
             raise ValueError(f"{field}.{key} must be {_kind(default)} (layout {name!r}), got {value!r}")
+        checked[key] = plain
     missing = [key for key, (default, _) in keywords.items() if default is inspect.Parameter.empty]
     missing = [key for key in missing if key not in kwargs]
     if missing:
         raise ValueError(f"{field}.{missing[0]} is required by layout {name!r}")
+    return checked
 
 
 def _kind(default: Any) -> str:
@@ -342,14 +351,19 @@ def _kind(default: Any) -> str:
     return "a list"
 
 
-def _same_kind(value: Any, default: Any) -> bool:
-    is_number = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+def _plain(value: Any, default: Any) -> Any:
+    """``value`` as the plain Python value of its default's kind, or None if it is not of that kind."""
+    integer = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
     if isinstance(default, bool):
-        return isinstance(value, bool)
+        return bool(value) if isinstance(value, (bool, np.bool_)) else None
     if isinstance(default, int):
-        return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+        return int(value) if integer else None
     if isinstance(default, float):
-        return is_number
+        return float(value) if integer or isinstance(value, (float, np.floating)) else None
     if isinstance(default, str) or default is inspect.Parameter.empty:
-        return isinstance(value, (str, os.PathLike))
-    return isinstance(value, (Sequence, np.ndarray)) and not isinstance(value, str)
+        return value if isinstance(value, str) else None
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, Sequence) and not isinstance(value, str):
+        return [v.tolist() if isinstance(v, np.ndarray) else v for v in value]
+    return None

@@ -29,7 +29,7 @@ from .layout_base import (
 )
 
 
-def _shelf_free_interior(name: str, size: float, start_clearance: float) -> None:
+def _check_thin_block(name: str, size: float, start_clearance: float) -> None:
     """ValueError unless a closed block of this ``size`` is too thin to hold the start pose inside it."""
     if not (math.isfinite(size) and 0.0 < size < 2.0 * start_clearance):
         raise ValueError(
@@ -66,7 +66,7 @@ def pillars(
     """
     check_size(width, height, 2.0 * start_clearance + 0.1)
     check_int("n_pillars", n_pillars, 0)
-    _shelf_free_interior("pillar_size", pillar_size, start_clearance)
+    _check_thin_block("pillar_size", pillar_size, start_clearance)
     check_passage("gap", gap, robot_radius, wall_radius)
     half = 0.5 * pillar_size
     lo = np.array([gap + half, gap + half])
@@ -275,7 +275,7 @@ def warehouse(
     check_size(width, height, 2.0)
     check_int("n_rows", n_rows, 1)
     check_int("n_cross", n_cross, 0)
-    _shelf_free_interior("shelf_depth", shelf_depth, start_clearance)
+    _check_thin_block("shelf_depth", shelf_depth, start_clearance)
     check_passage("cross_aisle", cross_aisle, robot_radius, wall_radius)
     if end_aisle < 2.0 * start_clearance:
         raise ValueError(f"end_aisle ({end_aisle} m) is too narrow for start_clearance {start_clearance} m")

@@ -269,14 +269,20 @@ def _check_hyperparameters(entry: Mapping[str, Any]) -> None:
 
 
 def _check_env(env_id: str, env_kwargs: Mapping[str, Any]) -> None:
-    """``env_kwargs`` build ``env_id`` (the env's own config checks name the field)."""
+    """``env_kwargs`` build ``env_id`` (the env's own config checks name the field), on a layout that is not a
+    held-out family (``ekfslam_gym.seeds.HELDOUT_FAMILIES``: never trained on)."""
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401  (registers the env ids)
+    from ekfslam_gym.seeds import check_training_family
 
     qualified = env_id if ":" in env_id else f"ekfslam_gym:{env_id}"
     try:
-        gym.make(qualified, **dict(env_kwargs)).close()
+        env = gym.make(qualified, **dict(env_kwargs))
+        config = getattr(env.unwrapped, "config", None)
+        env.close()
+        if config is not None:
+            check_training_family(config.world.layout, "the training envs")
     except (TypeError, ValueError, KeyError, gym.error.Error) as error:
         raise SettingsError(f"env_kwargs for {env_id}: {error}") from None
 
