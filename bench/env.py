@@ -1,4 +1,5 @@
-"""Benchmark: raw env steps/s of EKFSLAM-v0, with a breakdown, against CartPole-v1 in the same run.
+"""Benchmark: raw env steps/s of EKFSLAM-v0, with a breakdown, and of every registered id (the family ids at
+every tier), each against CartPole-v1 in the same run, with the milliseconds a reset takes.
 
     OPENBLAS_NUM_THREADS=1 python bench/env.py [--steps 20000] [--landmarks 10 50 200]
 
@@ -17,6 +18,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
+import math  # noqa: E402
 import time  # noqa: E402
 
 import gymnasium as gym  # noqa: E402
@@ -83,6 +85,45 @@ def breakdown(overrides: dict, steps: int) -> dict[str, float]:
     return {k: v * 1e6 for k, v in timings.items()}
 
 
+def registered_ids() -> list[tuple[str, str | None]]:
+    """(id, tier) of every registered EKFSLAM id; the family ids at each tier (the hard tier is the largest)."""
+    from ekfslam_gym.envs.presets import FAMILY_IDS, TIERS
+
+    found: list[tuple[str, str | None]] = []
+    for env_id in sorted(i for i in gym.registry if i.startswith("EKFSLAM")):
+        found += [(env_id, t) for t in TIERS] if env_id in FAMILY_IDS else [(env_id, None)]
+    return found
+
+
+def id_ratio(
+    env_id: str, tier: str | None, actions, cart_actions, cartpole, rounds: int = 3
+) -> tuple[float, float]:
+    """(best ratio of the id's raw steps/s to CartPole-v1's, the id's best rate), the two measured alternately
+    ``rounds`` times so that a passing load slows both alike."""
+    kwargs = {} if tier is None else {"tier": tier}
+    EKFSLAMEnv(preset=env_id, **kwargs).reset(seed=0)  # warm up outside the timing
+    ratio = rate = 0.0
+    for _ in range(rounds):
+        cart = steps_per_second(cartpole, cart_actions)
+        mine = steps_per_second(EKFSLAMEnv(preset=env_id, **kwargs), actions)
+        ratio, rate = max(ratio, mine / cart), max(rate, mine)
+    return ratio, rate
+
+
+def reset_ms(env_id: str, tier: str | None, resets: int = 20) -> float:
+    """Milliseconds of this process's CPU time per ``reset`` (a new world, layout and filter), best of three
+    runs of ``resets`` seeds (CPU time: a busy machine changes it far less than the wall time)."""
+    env = EKFSLAMEnv(preset=env_id, **({} if tier is None else {"tier": tier}))
+    env.reset(seed=0)
+    best = math.inf
+    for _ in range(3):
+        start = time.process_time()
+        for seed in range(resets):
+            env.reset(seed=seed)
+        best = min(best, (time.process_time() - start) / resets)
+    return best * 1e3
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -127,6 +168,14 @@ def main(argv=None) -> None:
         print(
             f"{name:>12} | {raw:>10,.0f} {made:>10,.0f} | 1/{cart_rate / raw:>9.1f} {raw / cart_rate:>6.3f}"
         )
+    print("\nevery registered id, unwrapped, its own config (velocity actions), alternated with CartPole-v1:")
+    print(f"{'id':>28} | {'steps/s':>9} {'ratio':>6} | {'reset, CPU ms':>13}")
+    steps = min(args.steps, 5_000)
+    for env_id, tier in registered_ids():
+        rounds = 1 if args.smoke else 3
+        ratio, rate = id_ratio(env_id, tier, actions[:steps], cart_actions[:steps], cartpole, rounds)
+        label = env_id if tier is None else f"{env_id}:{tier}"
+        print(f"{label:>28} | {rate:>9,.0f} {ratio:>6.3f} | {reset_ms(env_id, tier, 3 * rounds):>13.2f}")
     print("\nbreakdown at the default config, microseconds per step:")
     for stage, us in breakdown({}, min(args.steps, 10_000)).items():
         print(f"  {stage:>12}: {us:6.1f}")

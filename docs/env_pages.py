@@ -7,7 +7,7 @@ Every id the package registers at build time gets its page, so a new id is docum
 - the headline results (the reference rows of ``ekfslam_gym.benchmark``: the best baseline and the shipped
   policy, the five metrics that matter) and a link to every metric;
 - the full configuration the id builds, every field written out;
-- the shipped policy, if there is one, and the version history (``docs/env_versions.yaml``: a registered
+- the shipped policy, if there is one, and the version history (``ekfslam_gym.envs.presets.VERSION_HISTORY``: a registered
   version without an entry there stops the generator).
 """
 
@@ -19,7 +19,6 @@ from typing import Any
 
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
-VERSIONS = DOCS / "env_versions.yaml"
 # The five numbers that say how good a run was (Evaluation protocol defines each), best first in the table.
 HEADLINE = (
     ("map_log_det", "map log det Σ ↓"),
@@ -52,17 +51,20 @@ def family(env_id: str) -> tuple[str, int]:
 
 
 def version_history(env_id: str) -> list[dict[str, Any]]:
-    """The entries of ``env_id``'s family, oldest first; every registered version of it must have one."""
-    import yaml
+    """The releases of ``env_id``'s family, oldest first (``ekfslam_gym.envs.presets.VERSION_HISTORY``, the one
+    source); every registered version of it must have one."""
+    from ekfslam_gym.envs.presets import VERSION_HISTORY
 
     name, _ = family(env_id)
-    history = yaml.safe_load(VERSIONS.read_text()) or {}
-    entries = history.get(name, [])
+    entries = [
+        {"version": int(release.version.lstrip("v")), "package": release.package, "change": release.changes}
+        for release in VERSION_HISTORY.get(name, ())
+    ]
     known = {f"{name}-v{entry['version']}" for entry in entries}
     registered = {i for i in registered_ids() if family(i)[0] == name}
     missing = sorted(registered - known)
     if missing:
-        raise SystemExit(f"{VERSIONS.relative_to(ROOT)}: add a version entry for {missing}")
+        raise SystemExit(f"ekfslam_gym.envs.presets.VERSION_HISTORY: add a release for {missing}")
     return sorted(entries, key=lambda e: e["version"])
 
 
@@ -146,13 +148,14 @@ def render_env_page(env_id: str, generated: str, recipe: str | None = None) -> s
     import gymnasium as gym
 
     from ekfslam_gym.envs import EKFSLAMEnv
+    from ekfslam_gym.envs.episode import step_limit
 
     doc = EKFSLAMEnv.__doc__ or ""
     described = re.search(rf"``{re.escape(env_id)}``: (.*?)(?=\n\s*- ``|\n\s*\n|\Z)", doc, re.S)
     env = gym.make(env_id)
     base = env.unwrapped
     config = base.config
-    steps = env.spec.max_episode_steps
+    steps = step_limit(config)  # the env's own episode length in env steps, v0 and v1 alike
     seconds = steps * config.dt * (config.action.hold if config.action.kind != "velocity" else 1)
     name, version = family(env_id)
     image = DOCS / "images" / f"{env_id}.png"
@@ -169,8 +172,12 @@ def render_env_page(env_id: str, generated: str, recipe: str | None = None) -> s
         f"| Observation space | `{env.observation_space}` |",
         "| Reward range | (−∞, ∞): the drop in log det Σ in nats a step, plus the weighted terms of "
         "[the reward](../spaces-and-reward.md#reward) |",
-        f"| Episode length | {steps} env steps ({seconds:g} s simulated); earlier if every landmark is known "
-        "well enough or on a collision, as configured |",
+        f"| Episode length | {steps} env steps ({seconds:g} s simulated); "
+        + (
+            "earlier if every landmark is known well enough or on a collision, as configured |"
+            if config.terminate_on_complete
+            else "a fixed horizon: a complete map does not end it (`info['time_to_complete']` says when) |"
+        ),
         f'| Import | `import ekfslam_gym; gymnasium.make("{env_id}")` |',
         "",
         "## Description",

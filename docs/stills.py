@@ -34,11 +34,13 @@ def still(env_id: str, seed: int, fraction: float, path: Path) -> Path:
 
     import ekfslam_gym  # noqa: F401  (registers the ids)
 
+    from ekfslam_gym.envs.episode import step_limit
+
     env = gym.make(env_id, render_mode="rgb_array")
     agent = make_agent("frontier")
     obs, _ = env.reset(seed=seed)
     agent.reset(env, seed=seed)
-    for _ in range(int(fraction * env.spec.max_episode_steps)):
+    for _ in range(int(fraction * step_limit(env.unwrapped.config))):
         obs, _, terminated, truncated, _ = env.step(agent.act(obs))
         if terminated or truncated:
             break

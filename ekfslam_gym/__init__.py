@@ -1,8 +1,9 @@
 """ekfslam-gym: active SLAM as a Gymnasium environment.
 
-Importing the package registers ``EKFSLAM-v0``, ``EKFSLAM-Loop-v0`` and ``EKFSLAM-Large-v0``; both
-``gymnasium.make("EKFSLAM-v0")`` after ``import ekfslam_gym`` and ``gymnasium.make("ekfslam_gym:EKFSLAM-v0")``
-work.
+Importing the package registers every id of ``ekfslam_gym.envs.presets.PRESETS`` (``EKFSLAM-v0``,
+``EKFSLAM-Loop-v0``, ``EKFSLAM-Large-v0`` and their v1 versions, a v1 id per layout family, and
+``EKFSLAM-Mix-v1``); both ``gymnasium.make("EKFSLAM-v1")`` after ``import ekfslam_gym`` and
+``gymnasium.make("ekfslam_gym:EKFSLAM-v1")`` work.
 
 The shipped policies and any saved model's env (``ekfslam_gym.pretrained``, needs the ``train`` extra):
 ``load_pretrained(env_id)``, ``make_env_for_model(path)`` and ``load_model(path)``, imported on first use.
@@ -19,27 +20,35 @@ __version__ = "0.2.0"  # the package's version (pyproject.toml reads it from her
 
 def _register() -> None:
     from .envs.config import EnvConfig
-    from .envs.presets import PRESETS
+    from .envs.presets import PRESETS, registered_entry_point
 
     for env_id, overrides in PRESETS.items():
-        if env_id not in registry:
-            # The spec carries the preset's step limit (gym.make's TimeLimit), and HorizonSync, right above
+        if env_id in registry:
+            continue
+        limit = EnvConfig.from_overrides(**overrides).max_episode_steps
+        if limit is None:
+            # v1: the env's length is its config's (ekfslam_gym.envs.episode), no TimeLimit unless gym.make is
+            # given max_episode_steps, and then GivenStepLimit makes the env's own limit that number too.
+            wrapper = WrapperSpec(
+                name="GivenStepLimit", entry_point="ekfslam_gym.envs.episode:GivenStepLimit", kwargs={}
+            )
+        else:
+            # v0: the spec carries the preset's step limit (gym.make's TimeLimit), and HorizonSync, right above
             # that TimeLimit, makes the env's own limit (truncation, time left) the same number whichever of
             # gym.make(max_episode_steps=N) or the config gives it (see ekfslam_gym.envs.horizon).
-            limit = EnvConfig.from_overrides(**overrides).max_episode_steps
-            sync = WrapperSpec(
+            wrapper = WrapperSpec(
                 name="HorizonSync",
                 entry_point="ekfslam_gym.envs.horizon:HorizonSync",
                 kwargs={"registered_limit": limit},
             )
-            # The env builds the preset itself: ``config=`` then merges onto it, ``preset=None`` replaces it.
-            register(
-                id=env_id,
-                entry_point="ekfslam_gym.envs.ekfslam_env:EKFSLAMEnv",
-                max_episode_steps=limit,
-                additional_wrappers=(sync,),
-                kwargs={"preset": env_id},
-            )
+        # The env builds the preset itself: ``config=`` then merges onto it, ``preset=None`` replaces it.
+        register(
+            id=env_id,
+            entry_point=registered_entry_point(env_id),
+            max_episode_steps=limit,
+            additional_wrappers=(wrapper,),
+            kwargs={"preset": env_id},
+        )
 
 
 _register()

@@ -1,7 +1,8 @@
-"""The standard protocol in one command: an agent on the held-out suite of every registered env (or
-``--env-ids``), IQM with 95 % bootstrap CIs, beside the reference rows (the baselines and shipped policies of
-the last full run, ``ekfslam_gym/benchmark/reference.json``). Markdown on stdout (``--json``: one JSON object);
-``--out DIR`` writes ``benchmark.md`` and ``benchmark.json``.
+"""The standard protocol in one command: an agent on the held-out suite of every env with reference rows (the
+v0 ids; or ``--env-ids``), IQM with 95 % bootstrap CIs, beside the reference rows (the baselines and shipped
+policies of the last full run, ``ekfslam_gym/benchmark/reference.json``). Markdown on stdout (``--json``: one
+JSON object); ``--out DIR`` writes ``benchmark.md`` and ``benchmark.json``. ``--suite generalisation`` runs
+the generalisation suite instead (``ekfslam_gym.benchmark.generalisation``).
 
 Usage::
 
@@ -9,6 +10,7 @@ Usage::
     ekfslam-benchmark --agent ppo                                    # the shipped policy of every env
     ekfslam-benchmark --model runs/x/best_model.zip                  # a saved model, on the env of its record
     ekfslam-benchmark --agent myagents:make_agent --quick            # your own agent, 5 seeds (a smoke test)
+    ekfslam-benchmark --suite generalisation --out results           # every agent on the v1 ids and families
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..benchmark import QUICK_EPISODES, markdown, run
+from ..benchmark import QUICK_EPISODES, markdown, reference_rows, run
 from ..seeds import HELD_OUT
 from .common import command_line, command_parser, json_object
 
@@ -38,13 +40,20 @@ def _build_parser() -> argparse.ArgumentParser:
         "--agent-kwargs", type=json_object, default=None, help="constructor arguments as JSON"
     )
     parser.add_argument("--env-ids", default=None,
-                        help="comma-separated env ids; default every registered one (with --model: its record's)")  # fmt: skip
+                        help="comma-separated env ids; default those with reference rows, the v0 ids (with "
+                             "--model: its record's)")  # fmt: skip
     parser.add_argument("--force", action="store_true", help="run a model on env ids other than its own")
     parser.add_argument("--quick", action="store_true",
                         help=f"the suite's first {QUICK_EPISODES} seeds: a smoke test, not a result")  # fmt: skip
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of Markdown")
     parser.add_argument("--out", type=Path, default=None, help="write benchmark.md and benchmark.json here")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
+    parser.add_argument("--suite", choices=["generalisation"], default=None,
+                        help="generalisation: every baseline and shipped policy on every v1 layout id, the "
+                             "training families' held-out seeds and the held-out families (no --agent; --out "
+                             "DIR keeps a CSV of the episodes, and a run stopped early resumes from it)")  # fmt: skip
+    parser.add_argument("--suite-seeds", type=int, default=None,
+                        help="held-out seeds per env of the suite (default 10; --quick: 1)")  # fmt: skip
     return parser
 
 
@@ -89,10 +98,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     parser = _build_parser()
     args = parser.parse_args(argv)
+    if args.suite is not None:
+        return _suite(args, parser)
     make, label, model_ids = _factory(args, parser)
     registered = sorted(i for i in gym.registry if i.startswith("EKFSLAM"))
     if args.env_ids is None:
-        env_ids = [i for i in model_ids if i] if model_ids else registered
+        env_ids = [i for i in model_ids if i] if model_ids else [i for i in registered if reference_rows(i)]
     else:
         env_ids = [e.strip() for e in args.env_ids.split(",") if e.strip()]
     if unknown := [e for e in env_ids if e.split(":")[-1] not in gym.registry]:
@@ -118,6 +129,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         (args.out / "benchmark.md").write_text(text)
         (args.out / "benchmark.json").write_text(json.dumps(report, indent=1, allow_nan=False))
     print(json.dumps(report, allow_nan=False) if args.json else text, end="\n" if args.json else "")
+    return 0
+
+
+def _suite(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """``--suite generalisation`` (``ekfslam_gym.benchmark.generalisation``)."""
+    from ..benchmark.generalisation import run_suite
+
+    if args.agent is not None or args.model is not None or args.env_ids is not None:
+        parser.error("--suite runs every baseline and shipped policy on its own envs: leave out --agent, "
+                     "--model and --env-ids")  # fmt: skip
+    report = None if args.no_progress else (lambda line: print(line, file=sys.stderr, flush=True))
+    if args.suite_seeds is not None and args.suite_seeds < 1:
+        parser.error(f"--suite-seeds must be >= 1, got {args.suite_seeds}")
+    print(run_suite(quick=args.quick, seeds_per_case=args.suite_seeds, out=args.out, progress=report), end="")
     return 0
 
 

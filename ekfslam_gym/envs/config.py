@@ -22,7 +22,7 @@ from ..filter.settings import ASSOCIATION_NAMES, AssociationSettings, FilterSett
 from ..sim.odometry import OdometryNoise
 from ..sim.robot import RobotParams
 from ..sim.sensor import SensorParams
-from .presets import PRESETS
+from .presets import preset_overrides
 from .rewards import REWARD_TERMS
 
 
@@ -286,10 +286,14 @@ class EnvConfig:
 
     dt: control period (s); substeps: physics steps per control step; max_episode_steps: the time limit in env
     steps (truncation, and the horizon of the observation's time-left term; ``gym.make`` keeps its TimeLimit
-    equal to it, see ``ekfslam_gym.envs.horizon``); terminate_on_collision: end the episode
-    at the first wall contact; done_std: end the episode when every landmark's marginal standard deviation
-    (sqrt of the larger eigenvalue of its 2x2 covariance, m) is below this (0 disables); loop_gap: a re-observed
-    landmark unseen for at least this many steps counts as a loop closure.
+    equal to it, see ``ekfslam_gym.envs.horizon``), or None to take it from episode_time; episode_time: the
+    episode's length in s of simulated time when max_episode_steps is None, a whole number of dt, the same for
+    every action kind (``ekfslam_gym.envs.episode.step_limit`` is the rule); terminate_on_collision: end the
+    episode at the first wall contact; done_std: the map is complete when every landmark's marginal standard
+    deviation (sqrt of the larger eigenvalue of its 2x2 covariance, m) is below this (0: never);
+    terminate_on_complete: end the episode when the map is complete (``info["time_to_complete"]`` reports
+    when it was either way); loop_gap: a re-observed landmark unseen for at least this many steps counts as a
+    loop closure.
     """
 
     world: WorldConfig = field(default_factory=WorldConfig)
@@ -302,16 +306,28 @@ class EnvConfig:
     action: ActionConfig = field(default_factory=ActionConfig)
     dt: float = 0.1
     substeps: int = 2
-    max_episode_steps: int = 500
+    max_episode_steps: int | None = field(default=500, metadata={"optional": True})
+    episode_time: float | None = field(default=None, metadata={"optional": True})
     terminate_on_collision: bool = False
     done_std: float = 0.1
+    terminate_on_complete: bool = True
     loop_gap: int = 50
 
     def __post_init__(self) -> None:
         _positive("dt", self.dt)
         _integer("substeps", self.substeps, 1)
-        _integer("max_episode_steps", self.max_episode_steps, 1)
+        if self.max_episode_steps is not None:
+            _integer("max_episode_steps", self.max_episode_steps, 1)
+        if self.episode_time is not None:
+            _positive("episode_time", self.episode_time)
+            object.__setattr__(self, "episode_time", float(self.episode_time))
+            control_steps = round(self.episode_time / self.dt)
+            _require(abs(control_steps * self.dt - self.episode_time) <= 1e-9 * max(1.0, self.episode_time),
+                     "episode_time", f"must be a whole number of dt ({self.dt} s)", self.episode_time)  # fmt: skip
+        _require(self.max_episode_steps is not None or self.episode_time is not None, "max_episode_steps",
+                 "may be None only with an episode_time (s) to take the limit from", None)  # fmt: skip
         _require(isinstance(self.terminate_on_collision, bool), "terminate_on_collision", "must be a bool", self.terminate_on_collision)  # fmt: skip
+        _require(isinstance(self.terminate_on_complete, bool), "terminate_on_complete", "must be a bool", self.terminate_on_complete)  # fmt: skip
         _non_negative("done_std", self.done_std)
         _integer("loop_gap", self.loop_gap, 1)
         # The env's reward needs log det Sigma finite from the start: the course's zero pose prior is no option.
@@ -351,15 +367,19 @@ def build_config(
     config: EnvConfig | str | Path | Mapping[str, Any] | None,
     preset: str | None,
     overrides: Mapping[str, Any],
+    tier: str | None = None,
 ) -> EnvConfig:
     """The env's configuration: a mapping of sections or a YAML file of them merged onto ``preset``'s (a
-    registered id, ``ekfslam_gym.envs.presets``; None: the defaults), or a complete ``EnvConfig`` as it is;
-    then ``overrides`` on top."""
-    if preset is not None and preset not in PRESETS:
-        raise ValueError(f"unknown preset {preset!r}; known: {sorted(PRESETS)} or None (the defaults)")
+    registered id, ``ekfslam_gym.envs.presets``, at ``tier`` for a family id; None: the defaults), or a
+    complete ``EnvConfig`` as it is; then ``overrides`` on top."""
+    if preset is None and tier is not None:
+        raise ValueError(f"tier={tier!r} needs a family id's preset")
+    presets = preset_overrides(preset, tier) if preset is not None else None
     if isinstance(config, EnvConfig):
+        if tier is not None:
+            raise ValueError("tier= picks a preset's world, and a complete EnvConfig has its own: give one")
         return EnvConfig.from_overrides(config, **overrides)
-    base = EnvConfig.from_overrides(**PRESETS[preset]) if preset is not None else EnvConfig()
+    base = EnvConfig.from_overrides(**presets) if presets is not None else EnvConfig()
     if isinstance(config, (str, Path)):
         return EnvConfig.from_yaml(config, base, **overrides)
     if isinstance(config, Mapping):
@@ -379,7 +399,9 @@ def _replace(obj: Any, overrides: Mapping[str, Any], prefix: str) -> Any:
         if key not in fields:
             raise ValueError(f"unknown config field {prefix}{key!s}; known: {sorted(fields)}")
         current = getattr(obj, key)
-        if dataclasses.is_dataclass(current) and isinstance(value, Mapping):
+        if value is None and fields[key].metadata.get("optional"):
+            changes[key] = None  # a field that may be left unset (max_episode_steps, episode_time)
+        elif dataclasses.is_dataclass(current) and isinstance(value, Mapping):
             changes[key] = _replace(current, value, f"{prefix}{key}.")
         elif dataclasses.is_dataclass(current) and isinstance(value, type(current)):
             changes[key] = value

@@ -12,12 +12,13 @@ import numpy as np
 
 from .. import compiled
 from ..filter.ekf import EKFSLAM, FilterDivergedError
-from ..sim.layouts import make_layout
+from ..sim.layouts import Layout, make_layout
 from ..sim.sensor import Readings
 from ..sim.world import World
 from . import rewards
 from .actions import make_interface
-from .config import EnvConfig, build_config
+from .config import EnvConfig, WorldConfig, build_config
+from .episode import step_limit
 from .observation import ObservationLayout, make_memory, observation_constants, observation_space
 from .rewards import StepContext, Telescoped
 
@@ -105,12 +106,15 @@ class EKFSLAMEnv(gym.Env):
 
     ## Episode End
     Terminated: on a wall contact if ``terminate_on_collision``; when every landmark's marginal standard
-    deviation is below ``done_std`` m; when the filter fails numerically (``info["filter_failed"]``, never an
-    exception). Truncated after the step limit N in env steps, one number for ``gym.make``'s TimeLimit, the
-    env's own truncation and the time-left entry (``ekfslam_gym.envs.horizon``): the registered id's limit
-    (500, 800, 1000 control steps), divided by ``action.hold`` for macro actions so that an episode lasts the
-    same simulated time, unless ``gym.make(id, max_episode_steps=N)`` or the config's ``max_episode_steps``
-    gives N.
+    deviation is below ``done_std`` m (the map is complete) if ``terminate_on_complete`` (v0 only: a v1
+    episode runs on to its horizon, and ``info["time_to_complete"]`` says when the map was complete); when the
+    filter fails numerically (``info["filter_failed"]``, never an exception). Truncated after the step limit N
+    in env steps, one number for ``gym.make``'s TimeLimit, the env's own truncation and the time-left entry.
+    v1 ids: ``episode_time`` s of simulated time divided by the control steps of an env step, the same time
+    for every action kind, unless ``gym.make(id, max_episode_steps=N)`` or the config's ``max_episode_steps``
+    gives N env steps (``ekfslam_gym.envs.episode``). v0 ids: the registered limit (500, 800, 1000 control
+    steps), divided by ``action.hold`` for macro actions, unless a limit other than it is given
+    (``ekfslam_gym.envs.horizon``).
 
     ## Arguments
     ``gymnasium.make("EKFSLAM-v0", config=None, render_mode=None, **overrides)``: ``config`` is a mapping of
@@ -118,7 +122,8 @@ class EKFSLAMEnv(gym.Env):
     (``gym.make("EKFSLAM-Large-v0", config={"world": {"n_landmarks": 40}})`` keeps the Large rooms and 1000
     steps), or a complete ``EnvConfig``, used as it is; ``preset=None`` starts from the defaults instead of the
     id's preset, and ``EKFSLAMEnv(preset="EKFSLAM-Large-v0")`` builds an id's configuration without
-    ``gym.make``. ``overrides`` are sections applied on top, e.g. ``world={"n_landmarks": 50},
+    ``gym.make``; ``tier`` picks a family id's difficulty (its world and horizon). ``overrides`` are sections
+    applied on top, e.g. ``world={"n_landmarks": 50},
     reward={"collision": 2.0}, filter={"motion_model": "odometry"}`` (``ekfslam_gym.filter.FilterSettings``). A
     bad value raises ``ValueError`` naming the field. ``render_mode``: ``rgb_array`` or ``human``;
     ``render_options``: ``{"legend": False}`` drops the frame's legend, ``{"landmark_ellipse_scale": 5}`` draws
@@ -128,6 +133,10 @@ class EKFSLAMEnv(gym.Env):
     - ``EKFSLAM-v0``: 20 x 20 m arena, 30 landmarks, 500 steps of 0.1 s.
     - ``EKFSLAM-Loop-v0``: a corridor ring (the loop layout), 30 landmarks, 800 steps: closing the loop pays.
     - ``EKFSLAM-Large-v0``: 40 x 40 m rooms, 120 landmarks, 1000 steps.
+    - ``EKFSLAM-v1``, ``EKFSLAM-Loop-v1``, ``EKFSLAM-Large-v1`` and a ``EKFSLAM-<Family>-v1`` per layout family
+      (``tier="easy" | "medium" | "hard"``, default medium), and ``EKFSLAM-Mix-v1`` (a training family and tier
+      drawn at every reset): a fixed horizon in simulated time, the filter's initial draw on
+      (``ekfslam_gym.envs.presets`` describes each, with its version history).
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 10}
@@ -139,9 +148,10 @@ class EKFSLAMEnv(gym.Env):
         *,
         preset: str | None = None,
         render_options: Mapping[str, Any] | None = None,
+        tier: str | None = None,
         **overrides: Any,
     ) -> None:
-        config = build_config(config, preset, overrides)
+        config = build_config(config, preset, overrides, tier)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}"
@@ -179,8 +189,10 @@ class EKFSLAMEnv(gym.Env):
         resolution, sensor = config.observation.memory_resolution, config.sensor
         self._coverage_settings = (resolution, sensor.max_range, sensor.fov)
         self._loop_gap = config.loop_gap
+        self._dt = config.dt
         self._done_variance = config.done_std**2 if config.done_std > 0 else -math.inf
-        self._max_steps = config.max_episode_steps
+        self._max_steps = step_limit(config)
+        self._complete_terminates = config.terminate_on_complete
         # Readings go through ``_correct_unknown`` when the filter associates them itself, or to drop clutter.
         self._unknown = config.filter.association != "known" or config.sensor.clutter_rate > 0
         self._world: World | None = None
@@ -200,15 +212,14 @@ class EKFSLAMEnv(gym.Env):
         wrapper and the env agree; ``config.max_episode_steps`` reports the limit in force.
         """
         self.config = EnvConfig.from_overrides(self.config, max_episode_steps=steps)
-        self._max_steps = self.config.max_episode_steps
+        self._max_steps = step_limit(self.config)
 
     # ------------------------------------------------------------------ episode
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
         cfg = self.config
         rng = self.np_random
-        layout_kwargs = {"robot_radius": cfg.robot.radius, **cfg.world.layout_kwargs}
-        layout = make_layout(cfg.world.layout, rng, cfg.world.n_landmarks, **layout_kwargs)
+        layout = self._make_layout(cfg.world, rng)
         self._world = World(layout, cfg.robot, cfg.sensor, cfg.odometry, None, cfg.dt, cfg.substeps)
         f = cfg.filter
         self._ekf = ekf = EKFSLAM(
@@ -240,6 +251,7 @@ class EKFSLAMEnv(gym.Env):
         self._t = 0
         self._steps = 0
         self._loop_closures = 0
+        self._complete_time = math.inf  # s from reset to a complete map; inf until then
         self._collisions = 0
         self._path_length = 0.0
         self._filter_failed = False
@@ -408,10 +420,20 @@ class EKFSLAMEnv(gym.Env):
 
     # ------------------------------------------------------------------ hooks of a step
     def _is_terminated(self) -> bool:
-        """A wall contact when ``terminate_on_collision``, or every landmark certain to ``done_std``."""
+        """A wall contact when ``terminate_on_collision``, or a complete map (every landmark certain to
+        ``done_std``) when ``terminate_on_complete``; notes the control step the map was first complete at."""
         if self._collided and self.config.terminate_on_collision:
             return True
-        return self._worst_variance < self._done_variance
+        complete = self._worst_variance < self._done_variance
+        if complete and self._complete_time == math.inf:
+            self._complete_time = round(self._t * self._dt, 9)
+        return complete and self._complete_terminates
+
+    def _make_layout(self, world: WorldConfig, rng: np.random.Generator) -> Layout:
+        """The episode's layout from the ``world`` section, drawn from ``rng`` (a hook: an env that draws its
+        world at every reset overrides it)."""
+        layout_kwargs = {"robot_radius": self.config.robot.radius, **world.layout_kwargs}
+        return make_layout(world.layout, rng, world.n_landmarks, **layout_kwargs)
 
     def _is_truncated(self) -> bool:
         """The step limit (``config.max_episode_steps``, which a ``gym.make`` TimeLimit sets) is reached."""
@@ -450,6 +472,7 @@ class EKFSLAMEnv(gym.Env):
             "filter_failed": self._filter_failed,
             "false_associations": self._false_associations,
             "missed_associations": self._missed_associations,
+            "time_to_complete": self._complete_time,
         }
 
     # ------------------------------------------------------------------ pieces

@@ -43,6 +43,7 @@ readings            | slot ids; m and rad             | belief  | the (ids, z) r
 filter_failed       | bool                            | belief  | the filter failed numerically on this step: the episode is terminated, and a macro step's reward and ``reward_terms`` are those of its control steps before the failure (the failed one adds 0)
 false_associations  | count                           | truth   | readings matched to a slot holding another landmark, or clutter matched to any slot, since reset (0 with known association)
 missed_associations | count                           | truth   | readings of true landmarks neither matched nor starting a landmark, since reset (0 with known association)
+time_to_complete    | s                               | belief  | simulated time from reset until the map was first complete (every landmark's marginal sigma below ``done_std``), inf until then; the episode ends there only with ``terminate_on_complete`` (v0), the v1 ids run on to their horizon
 inner_steps         | control steps                   | episode | control steps the macro step ran
 inner_actions       | fractions of v_max, omega_max   | episode | the (forward, turn) command of each of them, (inner_steps, 2)
 """

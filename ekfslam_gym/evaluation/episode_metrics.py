@@ -5,7 +5,10 @@ block Sigma_mm, nats), ``pose_log_det`` (log det of the final marginal pose cova
 final estimates of the seen landmarks), ``missed_landmarks`` (never seen), ``seen_fraction``, ``ate`` (m, RMSE of
 estimated vs true positions over the steps, no alignment), ``anees`` (the pose NEES averaged over the steps),
 ``nees_in_bounds`` (fraction of steps whose pose NEES lies within the per-step 95 % chi-squared bounds, ideally
-0.95), ``loop_closures``, ``collisions`` (steps in contact with a wall), ``path_length`` (m, true), and belief
+0.95), ``loop_closures``, ``collisions`` (steps in contact with a wall), ``path_length`` (m, true),
+``time_to_complete`` (s of simulated time until the map was first complete, every landmark's sigma below
+``done_std``: ``info["time_to_complete"]``; the episode's length when it never was, so that a map never
+completed counts as the slowest, not as missing), and belief
 beside truth (``BELIEF_KEYS``, one value per episode, aggregated over episodes like every metric: IQM and CI,
 not pooled):
 
@@ -53,6 +56,7 @@ METRIC_KEYS: tuple[str, ...] = (
     "loop_closures",
     "collisions",
     "path_length",
+    "time_to_complete",
     "belief_truth_pearson",
     "belief_truth_spearman",
     "map_nees",
@@ -77,6 +81,12 @@ def _slogdet(matrix: np.ndarray) -> float:
         return math.nan
     sign, value = np.linalg.slogdet(matrix)
     return float(value) if sign > 0 else math.nan
+
+
+def time_to_complete(last_info: Mapping[str, Any], dt: float) -> float:
+    """s until the map was complete (``info["time_to_complete"]``), or the episode's length if it never was."""
+    value = float(last_info.get("time_to_complete", math.inf))
+    return value if math.isfinite(value) else float(last_info["step"]) * dt
 
 
 def episode_metrics(
@@ -121,6 +131,7 @@ def episode_metrics(
         "loop_closures": float(last_info["loop_closures"]),
         "collisions": float(last_info["collisions"]),
         "path_length": float(last_info["path_length"]),
+        "time_to_complete": time_to_complete(last_info, u.config.dt),
     }
     pearson, spearman = metrics.gain_correlation(belief_gains, truth_gains)
     result["belief_truth_pearson"], result["belief_truth_spearman"] = pearson, spearman

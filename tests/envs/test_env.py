@@ -227,7 +227,7 @@ def test_config_merges_onto_the_ids_preset_and_replacing_it_is_asked_for(tmp_pat
     assert gym.make("EKFSLAM-Large-v0", config=complete).unwrapped.config == complete
     assert EKFSLAMEnv(preset="EKFSLAM-Large-v0").config == large
     assert EKFSLAMEnv().config == EnvConfig()
-    with pytest.raises(ValueError, match=r"unknown preset 'EKFSLAM-Huge-v0'; known: \['EKFSLAM-Large-v0'"):
+    with pytest.raises(ValueError, match=r"unknown preset 'EKFSLAM-Huge-v0'; known: \[.*'EKFSLAM-Large-v0'"):
         EKFSLAMEnv(preset="EKFSLAM-Huge-v0")
 
 
@@ -618,7 +618,7 @@ def run_to_truncation(env, steps):
     return np.array(left), flags
 
 
-@pytest.mark.parametrize("env_id", ENV_IDS)
+@pytest.mark.parametrize("env_id", [i for i in ENV_IDS if i.endswith("-v0")])  # v1: tests/test_v1_episode.py
 def test_registered_ids_carry_their_preset_step_limit(env_id):
     limit = EnvConfig.from_overrides(**PRESETS[env_id]).max_episode_steps
     assert gym.spec(env_id).max_episode_steps == limit == {"EKFSLAM-v0": 500, "EKFSLAM-Loop-v0": 800,
