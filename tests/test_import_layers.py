@@ -1,7 +1,7 @@
 """The import contract: no import cycle anywhere in ``ekfslam_gym`` (the repository's ``agents/`` folder included,
 installed as ``ekfslam_gym.agents``), and layers that import only the layers below them, lowest first:
 
-    angles | compiled | ellipses | seeds | packaged (the shipped files, found by importlib.resources)
+    angles | compiled | kernel_types | ellipses | seeds | packaged (the shipped files, by importlib.resources)
     sim | filter | graph
     envs | data
     evaluation
@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SOURCES = {"ekfslam_gym": ROOT / "ekfslam_gym", "ekfslam_gym.agents": ROOT / "agents"}
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("angles", "compiled", "ellipses", "seeds", "packaged"),
+    ("angles", "compiled", "kernel_types", "ellipses", "seeds", "packaged"),
     ("sim", "filter", "graph"),
     ("envs", "data"),
     ("evaluation",),
