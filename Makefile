@@ -67,10 +67,10 @@ bench: install  # bench/graph.py compares with GTSAM when the bench extra is ins
 	$(BIN)/python bench/decisions.py
 	$(BIN)/python bench/actions.py
 
-# The documentation site, built offline from docs/ into site/ (strict: a broken link or a missing page fails).
+# The documentation site, built offline from docs/ into site/ (strict: every warning is shown, and fails the build).
 docs: install
 	$(BIN)/python docs/generate.py --check
-	$(BIN)/mkdocs build --strict --quiet
+	$(BIN)/mkdocs build --strict
 
 lint: install
 	$(BIN)/ruff check . && $(BIN)/ruff format --check .

@@ -15,7 +15,4 @@ from ekfslam_gym.cli.train import main
 __all__ = ["main"]
 
 if __name__ == "__main__":
-    from ekfslam_gym.cli.common import command_line
-
-    # bad input: one line on stderr, exit 2 (EKFSLAM_DEBUG=1: the traceback)
-    raise SystemExit(command_line("train")(main)())
+    raise SystemExit(main())

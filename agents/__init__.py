@@ -5,11 +5,13 @@ coverage sweep of the world's bounds), ``greedy`` (D-optimal information gain ov
 classic active-SLAM baseline; ``greedy2`` is the same planner looking two primitives ahead), ``frontier``
 (nearest-frontier exploration, Yamauchi 1997, the exploration literature's baseline), and ``ppo`` (a saved
 stable-baselines3 policy; needs the ``train`` extra).
-``make_agent(name, **kwargs)`` builds one by name, as ``python -m ekfslam_gym.evaluate --agent NAME`` does; a
+``make_agent(name, **kwargs)`` builds one by name, as ``ekfslam-evaluate --agent NAME`` does; a
 name of the form ``module:Class`` (or ``module:function``, a factory) builds a user's own agent, any object with
-``reset(env, seed)`` and ``act(observation)`` (docs/writing-an-agent.md).
+``reset(env, seed)`` and ``act(observation)`` (docs/writing-an-agent.md). What ``act`` returns is declared by
+the agent's ``action_kind`` (``ActionKind``: velocity, waypoint or primitives, the env's ``action.kind``).
 The planners that demonstrate in a macro action interface, for behaviour cloning, are in ``planners``;
-``extractors`` holds ``BeliefCNN``, the features extractor configs name by its dotted path. Training itself is
+``navigation`` holds the pieces the planners share (the grid, the wall memory, Dijkstra, frontiers, the wall
+veto); ``extractors`` holds ``BeliefCNN``, the features extractor configs name by its dotted path. Training itself is
 ``ekfslam_gym.training``.
 """
 
@@ -20,7 +22,8 @@ import os
 import sys
 from typing import Any
 
-from .base import Agent, clip_action, wall_scan
+from . import _name_guard  # noqa: F401  (first: refuses the name `agents`)
+from .base import ActionKind, Agent, clip_action, wall_scan
 from .baselines import CircleAgent, LawnmowerAgent, RandomAgent
 from .frontier import FrontierAgent
 from .greedy import GreedyInfoGainAgent, GreedyLookaheadAgent
@@ -96,6 +99,7 @@ def _import_attribute(name: str) -> Any:
 __all__ = [
     "AGENTS",
     "BASELINES",
+    "ActionKind",
     "Agent",
     "CircleAgent",
     "FrontierAgent",

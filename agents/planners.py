@@ -1,6 +1,6 @@
 """The planners that demonstrate in a macro action interface, for behaviour cloning (``ekfslam_gym.training``).
 
-A policy learns faster when a planner teaches it first (imitation, then RL; issue 8's planner-guided training).
+A policy learns faster when a planner teaches it first (imitation, then RL: planner-guided training).
 For the demonstrations to be imitable they must be in the policy's own interface. Two planners act in one:
 
 - ``greedy``: ``GreedyPrimitivesPlanner``, the greedy information-gain planner (``ekfslam_gym.agents.greedy``)
@@ -11,7 +11,8 @@ For the demonstrations to be imitable they must be in the policy's own interface
   controller; ``frontier.FrontierPrimitivesPlanner`` choosing, in a primitives env, the primitive whose arc ends
   nearest that goal.
 
-``make_planner(name, kind)`` builds one for an action interface.
+``make_planner(name, kind)`` builds one for an action interface. Each planner class declares the interface it
+acts in (``action_kind``), and ``PLANNERS`` is read from those declarations.
 """
 
 from __future__ import annotations
@@ -24,13 +25,10 @@ import numpy as np
 
 from ekfslam_gym.envs.actions import PRIMITIVES
 
-from .base import wall_scan
+from .base import ActionKind, Agent, wall_scan
 from .frontier import FrontierPrimitivesPlanner, FrontierWaypointPlanner
 from .greedy import GreedyInfoGainAgent, primitive_controls
-from .greedy.grid import mark_seen, update_walls
-from .greedy.veto import WALL_JOIN, scan_geometry, to_world
-
-PLANNERS = {"greedy": ("primitives",), "frontier": ("waypoint", "primitives")}  # the interfaces each acts in
+from .navigation import WALL_JOIN, mark_seen, scan_geometry, to_world, update_walls
 
 
 class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
@@ -46,6 +44,7 @@ class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
     """
 
     name = "greedy-primitives"
+    action_kind = ActionKind.PRIMITIVES
 
     def reset(self, env: gym.Env, seed: int | None = None) -> None:
         super().reset(env, seed)
@@ -107,17 +106,25 @@ class GreedyPrimitivesPlanner(GreedyInfoGainAgent):
         return f"GreedyPrimitivesPlanner(horizon={self.horizon})"
 
 
-def make_planner(
-    name: str, kind: str, **kwargs: Any
-) -> GreedyPrimitivesPlanner | FrontierWaypointPlanner | FrontierPrimitivesPlanner:
-    """The demonstration planner ``name`` (a key of ``PLANNERS``) for action interface ``kind``, built with
-    ``kwargs``; ValueError when the planner does not act in that interface."""
+# The demonstration planners by name, each a class per action interface it acts in.
+PLANNER_CLASSES: dict[str, tuple[type[Agent], ...]] = {
+    "greedy": (GreedyPrimitivesPlanner,),
+    "frontier": (FrontierWaypointPlanner, FrontierPrimitivesPlanner),
+}
+# The interfaces (``action.kind``) each planner acts in, from the classes' declarations.
+PLANNERS: dict[str, tuple[str, ...]] = {
+    name: tuple(str(cls.action_kind) for cls in classes) for name, classes in PLANNER_CLASSES.items()
+}
+
+
+def make_planner(name: str, kind: str, **kwargs: Any) -> Agent:
+    """The demonstration planner ``name`` (a key of ``PLANNERS``) for action interface ``kind`` (an
+    ``action.kind``), built with ``kwargs``; ValueError when the planner does not act in that interface."""
     if name not in PLANNERS:
         raise ValueError(f"unknown demonstration planner {name!r}; choose one of {list(PLANNERS)}")
-    if kind not in PLANNERS[name]:
-        raise ValueError(
-            f"the {name} planner demonstrates in action.kind {' or '.join(PLANNERS[name])}, not {kind!r}"
-        )
-    if name == "greedy":
-        return GreedyPrimitivesPlanner(**kwargs)
-    return FrontierWaypointPlanner(**kwargs) if kind == "waypoint" else FrontierPrimitivesPlanner(**kwargs)
+    for cls in PLANNER_CLASSES[name]:
+        if cls.action_kind == kind:
+            return cls(**kwargs)
+    raise ValueError(
+        f"the {name} planner demonstrates in action.kind {' or '.join(PLANNERS[name])}, not {str(kind)!r}"
+    )

@@ -5,13 +5,14 @@ or ``ppo_lstm`` (sb3-contrib's RecurrentPPO), read from the trainer's record bes
 policy class saved in the zip). A recurrent policy carries its LSTM state from one ``act`` to the next and
 starts every episode (``reset``) from a fresh one, as sb3-contrib's ``predict(state, episode_start)`` expects.
 
-File convention shared with the trainer: the model is ``<model>.zip`` and, when observations were normalised
-during training, the VecNormalize statistics are ``<model>_vecnormalize.pkl`` beside it. Without those
+File convention shared with the trainer (``ekfslam_gym.artefacts`` names the files): the model is
+``<model>.zip`` and, when observations were normalised during training, the VecNormalize statistics are
+``<model>_vecnormalize.pkl`` beside it. Without those
 statistics a policy trained on normalised observations would see inputs on the wrong scale, so they are
 loaded whenever the file exists (and can be required with ``require_vecnormalize``).
 
-The trainer also writes ``config.yaml`` (env id and config entry, with its ``env_kwargs``) beside every
-model; when it is there the agent exposes the env it was trained on (``trained_env_id``,
+The trainer also writes its record (env id and config entry, with its ``env_kwargs``: ``RunRecord``) beside
+every model; when it is there the agent exposes the env it was trained on (``trained_env_id``,
 ``trained_env_kwargs``): the evaluator runs it there unless told otherwise, and ``make_env()`` builds that env.
 ``load_model`` loads a saved model without importing the module its pickled ``policy_kwargs`` name (a model
 trained in a checkout names the top-level ``agents`` package, which an installed wheel does not have): the
@@ -31,9 +32,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from .base import Agent
+from ekfslam_gym.artefacts import RunRecord, model_paths, record_beside
 
-VECNORMALIZE_SUFFIX = "_vecnormalize.pkl"
+from .base import ActionKind, Agent
+
 # rl-zoo3's algorithm names -> (module, class); a config's train_settings choose one with ``algo``.
 ALGOS: dict[str, tuple[str, str]] = {
     "ppo": ("stable_baselines3", "PPO"),
@@ -55,11 +57,11 @@ def algo_class(algo: str = "ppo") -> Any:
     return getattr(imported, name)
 
 
-def saved_algo(zip_path: str | Path, record: dict[str, Any] | None = None) -> str:
+def saved_algo(zip_path: str | Path, record: RunRecord | None = None) -> str:
     """The ``algo`` a saved model was trained with: the trainer's record (``entry.algo``, absent = ``ppo``), or
     without one the saved policy class (sb3-contrib's recurrent policies are ``ppo_lstm``)."""
-    if record is not None and isinstance(record.get("entry"), dict):
-        return str(record["entry"].get("algo", "ppo"))
+    if record is not None and record.entry:
+        return record.algo
     try:
         with zipfile.ZipFile(zip_path) as archive:
             data = json.loads(archive.read("data"))
@@ -67,13 +69,6 @@ def saved_algo(zip_path: str | Path, record: dict[str, Any] | None = None) -> st
     except (OSError, KeyError, ValueError, zipfile.BadZipFile):
         return "ppo"
     return "ppo_lstm" if module.startswith("sb3_contrib.common.recurrent") else "ppo"
-
-
-def model_paths(path: str | Path) -> tuple[Path, Path]:
-    """(``<model>.zip``, ``<model>_vecnormalize.pkl``) for a model path given with or without ``.zip``."""
-    path = Path(path)
-    stem = path.with_suffix("") if path.suffix == ".zip" else path
-    return stem.with_name(stem.name + ".zip"), stem.with_name(stem.name + VECNORMALIZE_SUFFIX)
 
 
 def load_vecnormalize(path: str | Path) -> Any:
@@ -86,28 +81,8 @@ def load_vecnormalize(path: str | Path) -> Any:
     return stats
 
 
-def training_record(zip_path: str | Path) -> dict[str, Any] | None:
-    """The trainer's record of the model's run, parsed: ``<model>_config.yaml`` beside it, else the run folder's
-    ``config.yaml``; None when there is none (or it is unreadable)."""
-    zip_path = Path(zip_path)
-    path = zip_path.with_name(zip_path.stem + "_config.yaml")
-    if not path.is_file():
-        path = zip_path.parent / "config.yaml"
-    if not path.is_file():
-        return None
-    import yaml
-
-    try:
-        record = yaml.safe_load(path.read_text())
-    except yaml.YAMLError:
-        return None
-    return record if isinstance(record, dict) else None
-
-
 # policy_kwargs entries that name a class or function, resolved from a dotted name (``resolve_policy_kwargs``).
 CLASS_KWARGS = ("features_extractor_class", "activation_fn", "optimizer_class")
-# Records written before the agents moved under the package (0.2.0) name their classes ``agents.<module>.<Class>``.
-LEGACY_PREFIX = "agents."
 
 
 def import_dotted(name: str) -> Any:
@@ -140,17 +115,11 @@ def load_model(path: str | Path, *, device: str = "cpu", algo: str | None = None
     zip_path, _ = model_paths(path)
     if not zip_path.is_file():
         raise FileNotFoundError(f"no saved model at {zip_path}")
-    record = training_record(zip_path)
-    entry = record.get("entry") if record is not None else None
+    record = record_beside(zip_path)
+    recorded = record.policy_kwargs if record is not None else None
     custom: dict[str, Any] = {}
-    if isinstance(entry, dict) and isinstance(entry.get("policy_kwargs"), dict):
-        named = {
-            key: f"ekfslam_gym.{value}"
-            if isinstance(value, str) and value.startswith(LEGACY_PREFIX)
-            else value
-            for key, value in entry["policy_kwargs"].items()
-        }
-        custom["policy_kwargs"] = resolve_policy_kwargs(named)
+    if recorded is not None:
+        custom["policy_kwargs"] = resolve_policy_kwargs(recorded)
     return algo_class(algo or saved_algo(zip_path, record)).load(
         zip_path, device=device, custom_objects=custom or None
     )
@@ -195,7 +164,7 @@ class PPOAgent(Agent):
             zip_path, stats_path = model_paths(model_path)
             if not zip_path.is_file():
                 raise FileNotFoundError(f"no saved model at {zip_path}")
-            record = training_record(zip_path)
+            record = record_beside(zip_path)
             model = load_model(zip_path, device=device, algo=algo)
             if stats_path.is_file():
                 vecnormalize = load_vecnormalize(stats_path)
@@ -203,12 +172,11 @@ class PPOAgent(Agent):
                 raise FileNotFoundError(f"no VecNormalize statistics at {stats_path}")
             self.model_path = zip_path
             if record is not None:
-                self.trained_env_id = record.get("env_id")
-                entry = record.get("entry")
-                if isinstance(entry, dict) and isinstance(entry.get("env_kwargs"), dict):
-                    self.trained_env_kwargs = entry["env_kwargs"]
+                self.trained_env_id = record.env_id
+                self.trained_env_kwargs = record.env_kwargs
         self.model = model
         self.vecnormalize = vecnormalize
+        self.action_kind = trained_action_kind(model.action_space, self.trained_env_kwargs)
         self.recurrent = is_recurrent(model.policy)
         self._state: Any = None
         self._episode_start = np.ones((1,), dtype=bool)
@@ -257,6 +225,16 @@ class PPOAgent(Agent):
 
     def __repr__(self) -> str:
         return f"PPOAgent(model_path={str(self.model_path)!r})"
+
+
+def trained_action_kind(action_space: gym.Space, env_kwargs: dict[str, Any] | None) -> ActionKind | None:
+    """The interface a saved policy acts in: primitives for a Discrete action space, else the ``action.kind``
+    its training env's settings name; None when they do not (the env id's own interface)."""
+    if isinstance(action_space, gym.spaces.Discrete):
+        return ActionKind.PRIMITIVES
+    action = (env_kwargs or {}).get("action")
+    kind = action.get("kind") if isinstance(action, dict) else None
+    return ActionKind(kind) if kind in ("velocity", "waypoint") else None
 
 
 def is_recurrent(policy: Any) -> bool:

@@ -3,7 +3,7 @@
     python docs/comparison.py   # from docs/data/heldout_<env-id>.csv
 
 Each CSV holds one row per held-out episode (seeds 10000-10049) and agent, written from the per-episode metrics
-of ``python -m ekfslam_gym.evaluate --agent random,circle,lawnmower,greedy,frontier,ppo --model
+of ``ekfslam-evaluate --agent random,circle,lawnmower,greedy,frontier,ppo --model
 models/ppo_<env-id>.zip --env-id <env-id> --episodes-json F`` by ``--from-json F``. Landmark RMSE, ATE and ANEES
 are drawn on log axes (one circling episode reaches an ANEES in the thousands); the other axes are clipped to
 the boxes' whiskers, with the episodes beyond them counted above or below each box. Figures for reporting, never

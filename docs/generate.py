@@ -11,9 +11,12 @@ What it writes, and from which single source:
   ``gym.make`` builds it) and the reward terms (``REWARD_TERMS``);
 - ``docs/configuration.md``: every ``EnvConfig`` field with its default, unit and allowed values (the values
   are found by asking the config's own validation, see ``allowed_values``);
-- ``docs/envs/<id>.md``: one page per registered id, from its preset (``PRESETS``), its spec and its shipped
-  policy's training record (``models/ppo_<id>_config.yaml``);
+- ``docs/envs/<id>.md``: one page per registered id, whatever ids are registered (``env_pages.py``: its spaces,
+  its configuration, its reference results, its shipped policy's record and its version history);
+- ``docs/results/<id>.csv``: every metric of every reference row of an id (``ekfslam_gym.benchmark``);
+- the env pages' entries in ``mkdocs.yml``'s nav (between its ``env-pages`` markers);
 - ``configs/env/default.yaml``: ``EnvConfig()`` with every field written out and a comment per field;
+- the headline tables of ``docs/results.md`` (between its markers) from the reference rows;
 - the info-key table of ``docs/belief-and-truth.md`` (between its markers, the rest of that page written by hand)
   from ``ekfslam_gym.envs.info.INFO_KEYS``.
 
@@ -35,7 +38,8 @@ from typing import Any
 
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
-ENV_IDS = ("EKFSLAM-v0", "EKFSLAM-Loop-v0", "EKFSLAM-Large-v0")
+MKDOCS = ROOT / "mkdocs.yml"
+NAV_START, NAV_END = "# env-pages:start", "# env-pages:end"
 # The config each shipped policy's training run reproduces (models/README.md; tests/docs/test_docs.py holds each to its
 # model's record, models/ppo_<id>_config.yaml, field for field).
 SHIPPED_RECIPES = {
@@ -51,7 +55,10 @@ START, END = "<!-- info-keys:start -->", "<!-- info-keys:end -->"
 FIELD_NOTES: dict[str, tuple[str, str]] = {
     "world.layout": ("", "the layout generator, run anew at every reset"),
     "world.n_landmarks": ("", "the exact number of point landmarks"),
-    "world.layout_kwargs": ("m", "keyword arguments of the generator, e.g. `{width: 40.0, height: 40.0}`"),
+    "world.layout_kwargs": (
+        "m",
+        "keyword arguments of the generator, e.g. `{width: 40.0, height: 40.0}`; each layout's below",
+    ),
     "robot.radius": ("m", "the robot's body"),
     "robot.mass": ("kg", "the robot's body"),
     "robot.v_max": ("m/s", "forward speed at action 1.0"),
@@ -240,7 +247,7 @@ def render_environment() -> str:
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401  (registers the ids)
-    from ekfslam_gym.envs import PRESETS, EKFSLAMEnv
+    from ekfslam_gym.envs import EKFSLAMEnv, EnvConfig
 
     doc = inspect.cleandoc(EKFSLAMEnv.__doc__ or "")
     summary, _, body = doc.partition("\n")
@@ -249,20 +256,31 @@ def render_environment() -> str:
         "",
         GENERATED.format(source="EKFSLAMEnv's docstring"),
         "",
-        summary,
-        rst_to_markdown(body.replace("## ", "### ")),
+        _env_pages().unicode_math(summary),
+        _env_pages().unicode_math(rst_to_markdown(body.replace("## ", "### "))),
         "",
         "The observation's parts, the action kinds and the reward terms are tabled in",
-        "[Spaces and reward](spaces-and-reward.md); every config field in [Configuration](configuration.md).",
+        "[Spaces and reward](spaces-and-reward.md); every config field in [Configuration](configuration.md). The",
+        "paths above name files of the project's repository (`configs/env/` is installed as",
+        "`ekfslam_gym.configs.env`; the pages under `docs/` are this site).",
         "",
         "## Registered ids, their step limits and their overrides",
         "",
         "| id | max_episode_steps | overrides of the defaults | page |",
         "|---|---|---|---|",
     ]
-    for env_id, overrides in PRESETS.items():
+    defaults = {name: value for name, value, _ in _leaves(EnvConfig())}
+    for env_id in _env_pages().registered_ids():
+        env = gym.make(env_id)
+        config = getattr(env.unwrapped, "config", None)
+        changed = [
+            f"`{name}: {_cell(_yaml_value(value))}`"
+            for name, value, _ in (_leaves(config) if config is not None else ())
+            if name in defaults and value != defaults[name]
+        ]
+        env.close()
         lines.append(
-            f"| `{env_id}` | {gym.spec(env_id).max_episode_steps} | `{_cell(repr(overrides))}` "
+            f"| `{env_id}` | {gym.spec(env_id).max_episode_steps} | {', '.join(changed) or 'none: the defaults'} "
             f"| [{env_id}](envs/{env_id}.md) |"
         )
     return "\n".join(lines) + "\n"
@@ -295,7 +313,7 @@ def render_spaces() -> str:
     ]
     for name, part in layout.slices.items():
         lines.append(f"| `{name}` | {part.start}:{part.stop} | {part.stop - part.start} |")
-    lines += ["", rst_to_markdown(inspect.cleandoc(observation.__doc__ or "")), ""]
+    lines += ["", _env_pages().unicode_math(rst_to_markdown(inspect.cleandoc(observation.__doc__ or ""))), ""]
     lines += [
         "## Action",
         "",
@@ -326,7 +344,10 @@ def render_spaces() -> str:
         "",
         "| term | default weight | meaning |",
         "|---|---|---|",
-        *(f"| `{term.name}` | {term.default} | {_cell(term.meaning)} |" for term in REWARD_TERMS),
+        *(
+            f"| `{term.name}` | {term.default} | {_cell(_env_pages().unicode_math(term.meaning))} |"
+            for term in REWARD_TERMS
+        ),
         "",
     ]
     env.close()
@@ -357,7 +378,8 @@ def render_configuration() -> str:
         "",
         "Every field of `EnvConfig`, the frozen, validated configuration an env is built with. Give any of them "
         'to `gym.make` as a section (`gym.make("EKFSLAM-v0", sensor={"max_range": 4.0})`), as a mapping or '
-        "a YAML file in `config=` (`configs/env/default.yaml` writes every field out), or in a training "
+        "a YAML file in `config=` (the repository's `configs/env/default.yaml`, installed in the package as "
+        "`ekfslam_gym.configs.env`, writes every field out), or in a training "
         'config\'s `env_kwargs`. A bad value raises `ValueError` naming the field. "Allowed" is what the '
         "field's own validation accepts.",
         "",
@@ -374,7 +396,31 @@ def render_configuration() -> str:
             f"| `{name}` | `{_cell(_yaml_value(value))}` | {unit} | {_cell(allowed_values(name, value))} "
             f"| {_cell(note)} |"
         )
+    lines += render_layout_keywords()
     return "\n".join(lines).replace("\n\n\n", "\n\n") + "\n"
+
+
+def render_layout_keywords() -> list[str]:
+    """The keywords of every layout (``world.layout_kwargs``), from each generator's signature and docstring."""
+    import inspect
+
+    from ekfslam_gym.sim import LAYOUTS, layout_keywords
+
+    lines = [
+        "",
+        "## Layout keywords (`world.layout_kwargs`)",
+        "",
+        "What each `world.layout` takes in `world.layout_kwargs`, read from its generator's signature and "
+        "docstring. A key the layout does not take, or a value of the wrong kind, raises `ValueError` naming "
+        "`world.layout_kwargs.<key>` when the config is built; the layout is drawn once then too, so a value the "
+        "generator refuses raises there as well. [Layouts](layouts.md) shows each family at each tier.",
+    ]
+    for name in LAYOUTS:
+        lines += ["", f"### `{name}`", "", "| key | default | meaning |", "|---|---|---|"]
+        for key, (default, meaning) in layout_keywords(name).items():
+            shown = "required" if default is inspect.Parameter.empty else f"`{_cell(_yaml_value(default))}`"
+            lines.append(f"| `{key}` | {shown} | {_cell(meaning)} |")
+    return lines
 
 
 def render_default_yaml() -> str:
@@ -405,84 +451,75 @@ def render_default_yaml() -> str:
     return text
 
 
-def _record(env_id: str) -> dict[str, Any] | None:
-    import yaml
+def _env_pages() -> Any:
+    """docs/env_pages.py, loaded beside this script whether it runs as a script or is loaded by the tests."""
+    import importlib.util
 
-    path = ROOT / "models" / f"ppo_{env_id}_config.yaml"
-    return yaml.safe_load(path.read_text()) if path.is_file() else None
+    spec = importlib.util.spec_from_file_location("docs_env_pages", DOCS / "env_pages.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def render_env_page(env_id: str) -> str:
-    import gymnasium as gym
-
-    import ekfslam_gym  # noqa: F401
-    from ekfslam_gym.envs import PRESETS, EKFSLAMEnv, EnvConfig
-
-    doc = inspect.cleandoc(EKFSLAMEnv.__doc__ or "")
-    described = re.search(rf"``{re.escape(env_id)}``: (.*?)(?=\n- ``|\Z)", doc, re.S)
-    env = gym.make(env_id)
-    config = env.unwrapped.config
-    default = EnvConfig()
-    defaults = {name: value for name, value, _ in _leaves(default)}
-    changed = [(name, value, defaults[name]) for name, value, _ in _leaves(config) if value != defaults[name]]
-    record = _record(env_id)
-    lines = [
-        f"# {env_id}",
-        "",
+    return _env_pages().render_env_page(
+        env_id,
         GENERATED.format(
-            source=f"EKFSLAMEnv's docstring, PRESETS['{env_id}'] and models/ppo_{env_id}_config.yaml"
+            source=f"the registered id, its reference rows and docs/env_versions.yaml ({env_id})"
         ),
-        "",
-        " ".join((described.group(1) if described else "").split()),
-        "",
-        f"![{env_id}: the robot's belief mid-episode](../images/{env_id}.png)",
-        "",
-        "```python",
-        "import gymnasium as gym",
-        "import ekfslam_gym  # noqa: F401",
-        "",
-        f'env = gym.make("{env_id}")',
-        "obs, info = env.reset(seed=0)",
-        "```",
-        "",
-        "| | |",
-        "|---|---|",
-        f"| observation space | `{_cell(env.observation_space)}` |",
-        f"| action space | `{_cell(env.action_space)}` |",
-        f"| step limit | {env.spec.max_episode_steps} env steps of {config.dt} s |",
-        f"| landmarks | {config.world.n_landmarks} |",
-        f"| layout | `{config.world.layout}` {_cell(dict(config.world.layout_kwargs) or '')} |",
-        "",
-        f"Its preset, applied over `EnvConfig()`'s defaults: `{_cell(repr(PRESETS[env_id]))}`.",
-        "",
-    ]
-    if changed:
-        lines += ["| field | this id | default |", "|---|---|---|"]
-        lines += [f"| `{n}` | `{_cell(_yaml_value(v))}` | `{_cell(_yaml_value(d))}` |" for n, v, d in changed]
-        lines.append("")
-    if record is not None:
-        entry = record["entry"]
-        kwargs = entry.get("env_kwargs", {})
-        lines += [
-            "## The shipped policy",
-            "",
-            f"`models/ppo_{env_id}.zip`, `{entry.get('algo', 'ppo')}` with `{entry['policy']}`, trained for "
-            f"{entry['n_timesteps']:,} decisions: `python train.py --config {SHIPPED_RECIPES[env_id]} --env-id "
-            f"{env_id} --seed {record['seed']}` reproduces it (its training record, with the command line it ran: "
-            f"`models/ppo_{env_id}_config.yaml`). Its env settings on top of this id's:",
-            "",
-            "```yaml",
-            __import__("yaml").safe_dump(kwargs, sort_keys=False).strip(),
-            "```",
-            "",
-            f"![the shipped policy on held-out seed 10001](../ppo_{env_id}.gif)",
-            "",
-            "Its held-out results beside the baselines: [Results](../results.md); how it was found: "
-            "[the research log](../research-log.md).",
-            "",
-        ]
-    env.close()
-    return "\n".join(lines)
+        SHIPPED_RECIPES.get(env_id),
+    )
+
+
+def render_results_csv(env_id: str) -> str:
+    """Every metric of every reference row of ``env_id``: IQM and the CI's ends, one row per agent."""
+    import csv
+    import io
+
+    from ekfslam_gym.benchmark import reference_rows
+    from ekfslam_gym.evaluation.episode_metrics import METRIC_KEYS
+
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(
+        ["agent", "kind", "episodes"] + [f"{k}{s}" for k in METRIC_KEYS for s in ("", "_lo", "_hi")]
+    )
+    for row in reference_rows(env_id):
+        cells = [row["label"], row["kind"], row["episodes"]]
+        for key in METRIC_KEYS:
+            metric = row["metrics"].get(key)
+            cells += [metric["iqm"], *metric["ci"]] if metric else ["", "", ""]
+        writer.writerow(cells)
+    return out.getvalue()
+
+
+def render_nav() -> str:
+    """mkdocs.yml with one nav entry per registered id between its env-pages markers."""
+    text = MKDOCS.read_text()
+    head, start, rest = text.partition(NAV_START)
+    _, end, tail = rest.partition(NAV_END)
+    if not (start and end):
+        raise ValueError(f"{MKDOCS} lacks the markers {NAV_START} ... {NAV_END}")
+    indent = head[head.rfind("\n") + 1 :]
+    entries = "".join(f"{indent}- {i}: envs/{i}.md\n" for i in _env_pages().registered_ids())
+    return head + start + "\n" + entries + indent + end + tail
+
+
+RESULTS_PAGE = DOCS / "results.md"
+
+
+def render_results_page() -> str:
+    """The hand-written results page with each env's headline table made anew between its markers."""
+    text = RESULTS_PAGE.read_text()
+    for env_id in _env_pages().registered_ids():
+        start, end = f"<!-- headline:{env_id}:start -->", f"<!-- headline:{env_id}:end -->"
+        head, found, rest = text.partition(start)
+        if not found:
+            continue  # an id without reference rows has no section yet
+        _, _, tail = rest.partition(end)
+        table = "\n".join(_env_pages().headline_table(env_id, every_agent=True))
+        text = f"{head}{start}\n{table}\n{end}{tail}"
+    return text
 
 
 def render_belief_page() -> str:
@@ -514,9 +551,15 @@ def outputs() -> dict[Path, Any]:
         DOCS / "configuration.md": render_configuration,
         ROOT / "configs" / "env" / "default.yaml": render_default_yaml,
         BELIEF_PAGE: render_belief_page,
+        RESULTS_PAGE: render_results_page,
     }
-    for env_id in ENV_IDS:
+    from ekfslam_gym.benchmark import reference_rows
+
+    for env_id in _env_pages().registered_ids():
         files[DOCS / "envs" / f"{env_id}.md"] = lambda env_id=env_id: render_env_page(env_id)
+        if reference_rows(env_id):
+            files[DOCS / "results" / f"{env_id}.csv"] = lambda env_id=env_id: render_results_csv(env_id)
+    files[MKDOCS] = render_nav
     return files
 
 

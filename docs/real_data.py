@@ -11,7 +11,6 @@ docs/real_data_victoria_park_{map,nis}.png, and prints the Markdown tables. With
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import platform
 from pathlib import Path
@@ -21,23 +20,18 @@ import numpy as np
 from ekfslam_gym.data.gtsam2d import read_gtsam2d
 from ekfslam_gym.data.mrclam import load_mrclam
 from ekfslam_gym.evaluation.alignment import align_se2
-from ekfslam_gym.evaluation.chain_replay import anchored_at_first_pose, replay_chain
-from ekfslam_gym.evaluation.drive_smoother import smooth_keyframes
-from ekfslam_gym.evaluation.mrclam import (
+from ekfslam_gym.graph.optimizer import GTSAM_LM, optimize
+from ekfslam_gym.replay.chain import anchored_at_first_pose, replay_chain
+from ekfslam_gym.replay.figures import nis_summary, summarise
+from ekfslam_gym.replay.mrclam import (
     FITTED_MRCLAM,
     ReplaySettings,
     build_drive,
     landmark_errors,
     replay_drive,
 )
-from ekfslam_gym.evaluation.real_data import (
-    nis_summary,
-    save_map_picture,
-    save_nis_picture,
-    save_trajectory_picture,
-    summarise,
-)
-from ekfslam_gym.graph.optimizer import GTSAM_LM, optimize
+from ekfslam_gym.replay.pictures import save_map_picture, save_nis_picture, save_trajectory_picture
+from ekfslam_gym.replay.smoother import smooth_keyframes
 
 DOCS = Path(__file__).resolve().parent
 
@@ -76,17 +70,17 @@ def main() -> None:
     runs = {}
     for name, settings in [
         ("ekf, textbook noise", textbook),
-        ("fej, textbook noise", dataclasses.replace(textbook, variant="fej")),
-        ("iekf, textbook noise", dataclasses.replace(textbook, variant="iekf")),
+        ("fej, textbook noise", textbook.choosing(variant="fej")),
+        ("iekf, textbook noise", textbook.choosing(variant="iekf")),
         ("ekf, fitted noise", FITTED_MRCLAM),
-        ("fej, fitted noise", dataclasses.replace(FITTED_MRCLAM, variant="fej")),
-        ("iekf, fitted noise", dataclasses.replace(FITTED_MRCLAM, variant="iekf")),
+        ("fej, fitted noise", FITTED_MRCLAM.choosing(variant="fej")),
+        ("iekf, fitted noise", FITTED_MRCLAM.choosing(variant="iekf")),
     ]:
         runs[name] = replay_drive(drive, ids, settings)
-        print(_row(name, summarise(runs[name], ids, xy)))
+        print(_row(name, summarise(runs[name], settings, ids, xy)))
 
     base = runs["ekf, textbook noise"]
-    fitted = summarise(runs["ekf, fitted noise"], ids, xy)
+    fitted = summarise(runs["ekf, fitted noise"], FITTED_MRCLAM, ids, xy)
     errors, transform = landmark_errors(base.landmark_estimates(), ids, xy)
     smoothing = smooth_keyframes(drive, ids, textbook, base.poses)
     smoothed = {int(i): p for i, p in zip(ids, smoothing.landmarks)}
@@ -135,8 +129,8 @@ def main() -> None:
     for association in ("nearest", "jcbc"):
         for noise_name, noise in (("textbook", textbook), ("fitted", FITTED_MRCLAM)):
             for readings_name, source in (("landmarks", drive), ("+ robots", with_robots)):
-                result = replay_drive(source, ids, dataclasses.replace(noise, association=association))
-                f = summarise(result, ids, xy)
+                settings = noise.choosing(association=association)
+                f = summarise(replay_drive(source, ids, settings), settings, ids, xy)
                 print(
                     f"| {association} | {noise_name} | {readings_name} ({len(source.z)}) | {f['median_error']:.3f} | "
                     f"{f['within_0.18']} / {f['landmarks_mapped']} | {f['false_associations']} | "
@@ -150,7 +144,7 @@ def main() -> None:
     save_nis_picture(
         DOCS / "real_data_mrclam_nis.png",
         {
-            k: _minutes(runs[k])
+            k: _minutes(runs[k], drive)
             for k in ("ekf, textbook noise", "ekf, fitted noise", "fej, fitted noise", "iekf, fitted noise")
         },
         title="MRCLAM robot 1: NIS of the re-observations (2 dof), means of 50",
@@ -162,8 +156,8 @@ def main() -> None:
         _zero_shot(args.zero_shot)
 
 
-def _minutes(result) -> tuple[np.ndarray, np.ndarray]:
-    return (result.nis_time - result.drive.time[0]) / 60.0, result.nis
+def _minutes(result, drive) -> tuple[np.ndarray, np.ndarray]:
+    return (result.nis_at - drive.time[0]) / 60.0, result.nis
 
 
 def victoria_park(path: Path) -> None:

@@ -4,7 +4,8 @@
 
 The nearest-frontier planner drives each env from held-out seed 10001 for a fraction of its step limit, so the
 picture shows the belief mid-episode: the true world in black and grey, the estimates with their 3-sigma
-ellipses in blue, the estimated robot and its ellipse in red. Figures for reporting, never for tuning.
+ellipses in blue, the estimated robot and its ellipse in red, the region the sensor sees shaded, and the
+frame's legend naming each. One picture per id the package registers. Figures for reporting, never for tuning.
 """
 
 from __future__ import annotations
@@ -14,7 +15,15 @@ import sys
 from pathlib import Path
 
 IMAGES = Path(__file__).resolve().parent / "images"
-ENV_IDS = ("EKFSLAM-v0", "EKFSLAM-Loop-v0", "EKFSLAM-Large-v0")
+
+
+def registered_ids() -> list[str]:
+    """Every env id the package registers."""
+    from gymnasium.envs.registration import registry
+
+    import ekfslam_gym  # noqa: F401
+
+    return [i for i, spec in registry.items() if str(spec.entry_point).startswith("ekfslam_gym.")]
 
 
 def still(env_id: str, seed: int, fraction: float, path: Path) -> Path:
@@ -47,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=10001)
     parser.add_argument("--steps-fraction", type=float, default=0.6)
     args = parser.parse_args(argv)
-    for env_id in ENV_IDS:
+    for env_id in registered_ids():
         print(f"wrote {still(env_id, args.seed, args.steps_fraction, IMAGES / f'{env_id}.png')}")
     return 0
 

@@ -8,6 +8,8 @@ The shipped policies and any saved model's env (``ekfslam_gym.pretrained``, need
 ``load_pretrained(env_id)``, ``make_env_for_model(path)`` and ``load_model(path)``, imported on first use.
 """
 
+import sys
+from pathlib import Path
 from typing import Any
 
 from gymnasium.envs.registration import WrapperSpec, register, registry
@@ -41,6 +43,34 @@ def _register() -> None:
 
 
 _register()
+
+# The folders setup.py maps into the package from the checkout's top level (``agents/``, ``models/``,
+# ``configs/``): an install puts them inside it, an editable install's finder serves them from the checkout.
+MAPPED_PACKAGES = ("ekfslam_gym.agents", "ekfslam_gym.models", "ekfslam_gym.configs")
+
+
+class _UnmappedSourceTree:
+    """Last on ``sys.meta_path``, so asked only when no finder has ``ekfslam_gym.agents`` (models, configs):
+    the package was then imported from a source tree that no install mapped, e.g. the checkout's own folder
+    shadowing a regular install when Python runs from the checkout's root. Says so instead of a bare
+    ``No module named``."""
+
+    def find_spec(self, fullname: str, path: Any = None, target: Any = None) -> None:
+        if fullname in MAPPED_PACKAGES:
+            here = Path(__file__).resolve().parent
+            folder = fullname.split(".")[1]
+            raise ModuleNotFoundError(
+                f"no module named {fullname!r}: the ekfslam_gym imported from {here} is a source tree without "
+                f"its {folder}/ folder, which setup.py maps into the package at install. Install the checkout "
+                f"editable (pip install -e {here.parent}), or run from outside the checkout to use the "
+                "installed package.",
+                name=fullname,
+            )
+        return None
+
+
+if not any(type(finder).__name__ == _UnmappedSourceTree.__name__ for finder in sys.meta_path):
+    sys.meta_path.append(_UnmappedSourceTree())
 
 _LAZY = {
     "load_pretrained": "ekfslam_gym.pretrained",

@@ -36,6 +36,7 @@ KERNELS: dict[str, str] = {
     "cast_rays": "ekfslam_gym.sim.geometry",
     "accept_spaced": "ekfslam_gym.sim.geometry",
     "connected_component": "ekfslam_gym.sim.geometry",
+    "free_cells": "ekfslam_gym.sim.geometry",
     "odometry_reading": "ekfslam_gym.sim.odometry_kernels",
     "velocity_reading": "ekfslam_gym.sim.odometry_kernels",
     "wheel_reading": "ekfslam_gym.sim.odometry_kernels",

@@ -20,11 +20,15 @@ Needs the ``train`` extra (stable-baselines3, torch).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import warnings
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from .packaged import shipped_model
+
+DEFAULT_ENV_ID = "EKFSLAM-v0"
+"""The env of agents that name none (no training record)."""
 
 
 def load_pretrained(env_id: str = "EKFSLAM-v0", **agent_kwargs: Any) -> Any:
@@ -38,17 +42,15 @@ def load_pretrained(env_id: str = "EKFSLAM-v0", **agent_kwargs: Any) -> Any:
 def model_env(path: str | Path) -> tuple[str, dict[str, Any]]:
     """(env id, env settings) from the training record beside the saved model at ``path``; ValueError without
     one."""
-    from ekfslam_gym.agents.ppo import model_paths, training_record
+    from ekfslam_gym.artefacts import RECORD_FILE, RECORD_SUFFIX, model_paths, record_beside
 
     zip_path, _ = model_paths(path)
-    record = training_record(zip_path)
-    if record is None or not record.get("env_id"):
+    record = record_beside(zip_path)
+    if record is None or not record.env_id:
         raise ValueError(
-            f"no training record naming the env beside {zip_path} (<model>_config.yaml or config.yaml)"
+            f"no training record naming the env beside {zip_path} (<model>{RECORD_SUFFIX} or {RECORD_FILE})"
         )
-    entry = record.get("entry")
-    env_kwargs = entry.get("env_kwargs") if isinstance(entry, Mapping) else None
-    return str(record["env_id"]), dict(env_kwargs or {})
+    return record.env_id, dict(record.env_kwargs or {})
 
 
 def make_env_for_model(
@@ -60,7 +62,7 @@ def make_env_for_model(
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from ekfslam_gym.agents.ppo import model_paths
+    from ekfslam_gym.artefacts import model_paths
     from ekfslam_gym.evaluation.rollout import make_env, merge_env_kwargs
 
     env_id, trained = model_env(path)
@@ -72,3 +74,24 @@ def make_env_for_model(
         venv.training = False
         venv.norm_reward = False
     return venv
+
+
+def resolve_env_id(agents: Sequence[Any], env_id: str | None = None, force: bool = False) -> str:
+    """The env to run ``agents`` on: ``env_id`` when given, else the one their training records name
+    (``trained_env_id``; one for all), else ``DEFAULT_ENV_ID``. ValueError when agents were trained on different
+    envs and none is given, or when ``env_id`` is not the one an agent was trained on and not ``force``d (then a
+    warning says so)."""
+    trained = {a: str(a.trained_env_id) for a in agents if getattr(a, "trained_env_id", None)}
+    if env_id is None:
+        ids = sorted({t.split(":")[-1] for t in trained.values()})
+        if len(ids) > 1:
+            raise ValueError(f"the models were trained on different envs ({', '.join(ids)}); give --env-id "
+                             "(and --force to run them off their own)")  # fmt: skip
+        return ids[0] if ids else DEFAULT_ENV_ID
+    for agent, trained_id in trained.items():
+        if trained_id.split(":")[-1] != env_id.split(":")[-1]:
+            if not force:
+                raise ValueError(f"{agent!r} was trained on {trained_id}, not {env_id}: leave out --env-id to "
+                                 f"evaluate it on {trained_id}, or add --force")  # fmt: skip
+            warnings.warn(f"{agent!r} was trained on {trained_id}, evaluated on {env_id}", stacklevel=2)
+    return env_id

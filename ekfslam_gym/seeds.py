@@ -18,6 +18,7 @@ Messages name a range through ``span`` (``"10000-10049"``), so a range changes i
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 
 HELD_OUT_SEEDS: tuple[int, ...] = tuple(range(10000, 10050))
 """The held-out evaluation suite. Never train, tune or select models on these seeds."""
@@ -120,3 +121,46 @@ def check_demonstration_seeds(seeds: Iterable[int], eval_seeds: Iterable[int] = 
 def _some(seeds: Sequence[int]) -> str:
     """The first five of ``seeds``, with an ellipsis when there are more."""
     return f"{list(seeds[:5])}{'...' if len(seeds) > 5 else ''}"
+
+
+# ------------------------------------------------------------------------------------ layout families
+TRAINING_FAMILIES: tuple[str, ...] = ("arena", "pillars", "rooms", "loop", "figure_eight", "office")
+"""The layout families (``ekfslam_gym.sim.families``) a generalist may be trained, tuned and selected on."""
+
+HELDOUT_FAMILIES: tuple[str, ...] = ("warehouse", "maze")
+"""Layout families for the final table only: never train, tune or select a model (nor tune a baseline) on
+any world of them. ``maze`` is unlike every training family: corridors one cell wide that branch and end in
+dead ends, a tree with no loop to close and no open space; ``warehouse`` (long aisles between rows of shelves
+that hide all but one aisle) is held out as a second, nearer test."""
+
+
+@dataclass(frozen=True)
+class FamilySeeds:
+    """One family's seed ranges: ``training`` (the training envs), ``evaluation`` (model selection, sweeps,
+    comparisons) and ``heldout`` (the final table). A held-out family has no training or evaluation seeds."""
+
+    training: range
+    evaluation: tuple[int, ...]
+    heldout: tuple[int, ...]
+
+
+def family_seeds(family: str) -> FamilySeeds:
+    """The seed ranges of one layout family: a training family's are the ranges above (seed s of two families
+    names two different worlds); a held-out family has only the held-out suite. ValueError for an unknown one."""
+    if family in TRAINING_FAMILIES:
+        return FamilySeeds(range(0, min(HELD_OUT_SEEDS)), EVAL_SEEDS, HELD_OUT_SEEDS)
+    if family in HELDOUT_FAMILIES:
+        return FamilySeeds(range(0), (), HELD_OUT_SEEDS)
+    raise ValueError(
+        f"unknown layout family {family!r}; choose one of {', '.join(TRAINING_FAMILIES + HELDOUT_FAMILIES)}"
+    )
+
+
+def check_training_family(family: str, what: str) -> str:
+    """``family``; ValueError naming ``what`` (e.g. "training envs") if it is a held-out family."""
+    if family in HELDOUT_FAMILIES:
+        raise ValueError(
+            f"{what} use the held-out layout family {family!r}, which is for the final table only; train, "
+            f"tune and select on the training families: {', '.join(TRAINING_FAMILIES)}"
+        )
+    return family

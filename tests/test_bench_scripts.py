@@ -18,6 +18,7 @@ EXPECTED = {
     "env.py": "CartPole-v1",
     "sim.py": "step = physics",
     "graph.py": "bearing-range",
+    "layouts.py": "placement grid",
     "startup.py": "ratio EKFSLAM-v0 / CartPole-v1",
     "train.py": "env steps/s",
 }

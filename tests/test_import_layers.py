@@ -1,22 +1,31 @@
 """The import contract: no import cycle anywhere in ``ekfslam_gym`` (the repository's ``agents/`` folder included,
 installed as ``ekfslam_gym.agents``), and layers that import only the layers below them, lowest first:
 
-    angles | compiled | kernel_types | ellipses | seeds | packaged (the shipped files, by importlib.resources)
+    angles | compiled | kernel_types | ellipses | seeds | packaged | artefacts (the shipped files, found by
+        importlib.resources; the names of a training run's files and its record's parser)
     sim | filter | graph
     envs | data
     evaluation
-    agents
+    agents | replay (the recorded drives replayed through the filter)
     training (itself ordered: settings, demonstrations, artefacts, cloning, keep_cloning, pretraining, run, sweep)
     benchmark | pretrained (the protocol; the shipped policies with their envs)
-    cli (the command lines and their ``python -m`` entry points)
+    cli (the command lines, each also ``python -m ekfslam_gym.cli.<name>``)
 
-Packages on one line are independent of each other. Every ``import`` statement counts, those inside functions
+Packages on one line are independent of each other. Inside ``agents``, the planners' shared pieces
+(``agents.navigation``: the grid, walls, paths, frontiers, the veto) import no agent, so another env's planners
+reuse them alone. Every ``import`` statement counts, those inside functions
 (lazy imports) too. The graph is read from the sources with ``ast``, so nothing is imported to check it.
+
+One name per module: the checkout's top-level ``agents/``, ``configs/`` and ``models/`` folders are the packages
+``ekfslam_gym.agents``, ``.configs`` and ``.models``; their own names are refused (a second name would be a second
+copy of every class), and a source tree imported without that mapping says so.
 """
 
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
@@ -24,29 +33,17 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = {"ekfslam_gym": ROOT / "ekfslam_gym", "ekfslam_gym.agents": ROOT / "agents"}
+MAPPED_FOLDERS = ("agents", "configs", "models")  # top-level folders installed inside the package (setup.py)
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("angles", "compiled", "kernel_types", "ellipses", "seeds", "packaged"),
+    ("angles", "compiled", "ellipses", "seeds", "packaged", "artefacts", "kernel_types"),
     ("sim", "filter", "graph"),
     ("envs", "data"),
     ("evaluation",),
-    ("agents",),
+    ("agents", "replay"),
     ("training",),
     ("benchmark", "pretrained"),
     ("cli",),
-)
-# The package itself registers the env ids (envs); the ``python -m`` entry points belong with the command lines.
-ENTRY_POINTS = (
-    "compare",
-    "consistency",
-    "evaluate",
-    "replay",
-    "smoothing",
-    "sweep",
-    "tradeoff",
-    "graph.__main__",
-    "benchmark.__main__",
-    "train",
 )
 TRAINING_ORDER = (
     "settings",
@@ -102,8 +99,6 @@ def imports(known: Mapping[str, Path]) -> dict[str, set[str]]:
 def place(module: str) -> tuple[int, str]:
     """(layer, group) of a module: its layer's index and the package on that line it belongs to."""
     rest = module.split(".", 1)[1] if "." in module else ""
-    if rest in ENTRY_POINTS:
-        return len(LAYERS) - 1, "cli"
     if not rest:
         return 2, "envs"  # the package's __init__ registers the env ids
     top = rest.split(".")[0]
@@ -134,6 +129,19 @@ def training_violations(graph: Mapping[str, Iterable[str]]) -> list[str]:
         for target in targets:
             if module in rank and target in rank and rank[target] >= rank[module]:
                 found.append(f"{module} imports {target}, later in the training order")
+    return sorted(found)
+
+
+def navigation_violations(graph: Mapping[str, Iterable[str]]) -> list[str]:
+    """Every import of an agents module outside ``agents.navigation`` (and the angles it reads) from inside it."""
+    prefix = "ekfslam_gym.agents.navigation"
+    found = []
+    for module, targets in graph.items():
+        if module == prefix or module.startswith(prefix + "."):
+            for target in targets:
+                inside = target == prefix or target.startswith(prefix + ".")
+                if target.startswith("ekfslam_gym.agents") and not inside:
+                    found.append(f"{module} imports {target}")
     return sorted(found)
 
 
@@ -197,16 +205,26 @@ def test_training_imports_one_way(graph):
     assert training_violations(graph) == []
 
 
+def test_the_planners_shared_pieces_import_no_agent(graph):
+    assert "ekfslam_gym.agents.navigation.paths" in graph
+    assert navigation_violations(graph) == []
+
+
 def test_the_checks_catch_what_they_forbid():
     """An upward import (lazy or not), a peer import, a cycle and a training import against the order."""
     upward = {"ekfslam_gym.evaluation.rollout": {"ekfslam_gym.agents"}, "ekfslam_gym.agents": set()}
     assert layer_violations(upward) == [
-        "ekfslam_gym.evaluation.rollout imports ekfslam_gym.agents (('agents',) is not below ('evaluation',))"
+        "ekfslam_gym.evaluation.rollout imports ekfslam_gym.agents (('agents', 'replay') is not below ('evaluation',))"
     ]
+    assert layer_violations({"ekfslam_gym.replay.mrclam": {"ekfslam_gym.agents.base"}})  # peers, independent
     assert layer_violations({"ekfslam_gym.sim.world": {"ekfslam_gym.filter.ekf"}})  # peers are independent
     assert layer_violations({"ekfslam_gym.envs.config": {"ekfslam_gym.sim.robot"}}) == []
     assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert training_violations({"ekfslam_gym.training.cloning": {"ekfslam_gym.training.run"}})
+    assert navigation_violations(
+        {"ekfslam_gym.agents.navigation.paths": {"ekfslam_gym.agents.frontier.agent"}}
+    )
+    assert not navigation_violations({"ekfslam_gym.agents.frontier.agent": {"ekfslam_gym.agents.navigation"}})
 
 
 def test_lazy_imports_are_read(tmp_path):
@@ -215,3 +233,64 @@ def test_lazy_imports_are_read(tmp_path):
     known = {"ekfslam_gym.lazy": source, "ekfslam_gym.agents": tmp_path / "agents.py"}
     (tmp_path / "agents.py").write_text("")
     assert imports(known)["ekfslam_gym.lazy"] == {"ekfslam_gym.agents"}
+
+
+def _python(code: str, *options: str, cwd: Path = ROOT) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, *options, "-c", code], cwd=cwd, capture_output=True, text=True)
+
+
+@pytest.mark.parametrize(
+    "name", ["agents", "agents.base", "agents.greedy.agent", "configs", "configs.env", "models"]
+)
+def test_the_top_level_name_is_refused_from_the_checkout(name):
+    package = f"ekfslam_gym.{name.split('.')[0]}"
+    done = _python(f"import {name}")
+    assert done.returncode == 1
+    assert f"ImportError: the checkout's {name.split('.')[0]}/ folder installs as {package}" in done.stderr
+
+
+def test_the_package_name_is_the_one_module_from_the_checkout():
+    """From the checkout's root the package name imports the checkout's files, and no top-level copy appears."""
+    code = (
+        "import sys, ekfslam_gym.agents.base as base, ekfslam_gym.configs, ekfslam_gym.models\n"
+        "print(base.__file__)\n"
+        f"print(sorted(m for m in sys.modules if m.split('.')[0] in {MAPPED_FOLDERS!r}))\n"
+    )
+    done = _python(code)
+    assert done.returncode == 0, done.stderr
+    file, others = done.stdout.splitlines()
+    assert Path(file).resolve() == ROOT / "agents" / "base.py"
+    assert others == "[]"
+
+
+def test_a_source_tree_without_its_mapping_says_so(tmp_path):
+    """The package's own folder on the path with no install's mapping (as when the checkout's root shadows a
+    regular install): ``ekfslam_gym.agents`` is refused with the way out, and the env still registers."""
+    (tmp_path / "ekfslam_gym").symlink_to(ROOT / "ekfslam_gym")
+    site = [p for p in sys.path if p.endswith("site-packages")]
+    code = (
+        f"import sys; sys.path[:0] = [{str(tmp_path)!r}]; sys.path += {site!r}\n"
+        "import gymnasium as gym, ekfslam_gym\n"
+        "gym.make('EKFSLAM-v0').close()\n"
+        "import ekfslam_gym.agents\n"
+    )
+    done = _python(code, "-S", cwd=tmp_path)  # -S: no site, so no .pth file installs an editable finder
+    assert done.returncode == 1
+    assert "ModuleNotFoundError: no module named 'ekfslam_gym.agents'" in done.stderr
+    assert "is a source tree without its agents/ folder" in done.stderr
+    assert "pip install -e" in done.stderr
+
+
+def test_no_source_imports_a_mapped_folder_by_its_top_level_name():
+    files = [
+        *ROOT.glob("*.py"),
+        *(p for d in ("ekfslam_gym", "agents", "tests", "bench", "docs") for p in (ROOT / d).rglob("*.py")),
+    ]
+    found = []
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
+            if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module]
+            found += [f"{path.relative_to(ROOT)}: {n}" for n in names if n.split(".")[0] in MAPPED_FOLDERS]
+    assert found == []

@@ -1,5 +1,5 @@
 """The shipped policies: one per registered env, each beside its statistics, training record and versions, and
-each runs through ``python -m ekfslam_gym.evaluate --agent ppo --model models/<file>.zip --env-id <id>`` on the
+each runs through ``ekfslam-evaluate --agent ppo --model models/<file>.zip --env-id <id>`` on the
 settings its record names (action interface and observation included). No quality is asserted here."""
 
 from __future__ import annotations

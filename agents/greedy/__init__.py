@@ -31,7 +31,8 @@ near-tie between turning left and right does not flip at every replan.
 Walls: the planner does *not* use the privileged wall geometry. It vetoes a primitive when its path, in the
 robot frame, comes closer than ``robot radius + clearance`` to the wall scan of the current observation (beam
 end points, joined into segments where neighbouring beams hit the same surface) while closing in, or leaves
-the world's bounds. Turning in place is never vetoed, so there is always a way out.
+the world's bounds. Turning in place is never vetoed, so there is always a way out. The coverage grid, the wall
+memory, the distance field and the veto are the planners' shared pieces (``ekfslam_gym.agents.navigation``).
 
 Cost: ``len(primitives)`` rollouts of ``horizon`` predict/correct pairs every ``replan_every`` steps (and
 sooner if the new scan vetoes the primitive being executed), plus one shortest-path sweep of the grid: about

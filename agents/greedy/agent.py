@@ -10,9 +10,9 @@ import gymnasium as gym
 import numpy as np
 
 from ..base import Agent, beam_angles, clip_action, wall_scan
-from .grid import count_new, frontier_field, mark_seen, update_walls
+from ..navigation import count_new, frontier_field, mark_seen, update_walls
+from ..navigation.veto import WALL_JOIN, arc_vetoed, scan_geometry, to_world
 from .rollout import DEFAULT_PRIMITIVES, discovery_nats, primitive_controls, rollout, rollout_gain
-from .veto import WALL_JOIN, arc_vetoed, scan_geometry, to_world
 
 
 class GreedyInfoGainAgent(Agent):
@@ -34,8 +34,8 @@ class GreedyInfoGainAgent(Agent):
             first primitive also earns ``discount`` times the best score of a second one driven from where
             it ends, on the belief, wall scan and coverage it leaves; about ten times the cost of a plan).
 
-    The defaults are the best of sweeps in EKFSLAM-v0 on training seeds 0-19 (horizon 10-20, replanning every
-    1-5 steps, the weights at 0.5-4x, lookahead 1-3 m, frontier_scale 1-4 m); most settings were within 2 %.
+    The defaults are the best of sweeps in EKFSLAM-v0 on training seeds (docs/research-log.md, *How the
+    planners' defaults were chosen*).
     """
 
     name = "greedy"

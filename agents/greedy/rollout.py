@@ -13,6 +13,8 @@ from ekfslam_gym.angles import wrap_angles
 from ekfslam_gym.envs.actions import PRIMITIVES
 from ekfslam_gym.sim.odometry import odometry_std, velocity_std, wheel_std
 
+from ..navigation.veto import arc_poses
+
 DEFAULT_PRIMITIVES = PRIMITIVES  # the env's own set, so a primitives policy and the planner choose alike
 
 
@@ -44,22 +46,6 @@ def primitive_controls(
     controls = np.tile(control, (horizon, 1))
     covs = np.tile(np.diag(std**2), (horizon, 1, 1))
     return controls, covs, arc_poses(v, omega, dt, horizon)
-
-
-def arc_poses(v: float, omega: float, dt: float, steps: int) -> np.ndarray:
-    """The poses (steps + 1, 3) relative to the start that ``v`` (m/s) and ``omega`` (rad/s) held for ``steps``
-    steps of ``dt`` s reach in free space: each step a chord v dt sinc(omega dt / 2) at the mid-step heading."""
-    half = 0.5 * omega * dt
-    chord = v * dt * (math.sin(half) / half if abs(half) > 1e-9 else 1.0)
-    poses = np.zeros((steps + 1, 3))
-    for k in range(steps):
-        x, y, theta = poses[k]
-        poses[k + 1] = (
-            x + chord * math.cos(theta + half),
-            y + chord * math.sin(theta + half),
-            theta + 2 * half,
-        )
-    return poses
 
 
 def expected_readings(

@@ -18,7 +18,6 @@ from typing import Any
 from ..evaluation.aggregate import summary
 from ..evaluation.episode_metrics import METRIC_KEYS
 from ..evaluation.report import format_value, json_safe
-from ..evaluation.rollout import evaluate_agent
 from ..seeds import HELD_OUT_SEEDS, span
 
 QUICK_EPISODES = 5
@@ -37,7 +36,8 @@ policy hold only some metrics, shown as a dash elsewhere."""
 @cache
 def reference() -> dict[str, Any]:
     """``reference.json``: ``{"about", "protocol", "package", "versions", "envs": {env_id: [row, ...]}}``, each row
-    ``{"agent", "label", "kind" (baseline | shipped), "episodes", "metrics": {key: {"iqm", "ci"}}, "source"}``."""
+    ``{"agent", "label", "kind" (baseline | shipped), "episodes", "metrics": {key: {"iqm", "ci"}}, "source"}``, and
+    ``"package"`` where a row was made by another version of the package than the file's ``package`` names."""
     return json.loads(resources.files(__name__).joinpath("reference.json").read_text(encoding="utf-8"))
 
 
@@ -63,7 +63,9 @@ def run(
     protocol seeds; the report: ``{"agent", "quick", "seeds", "package", "results": {env_id: {"summary",
     "reference", "reproduces"}}}`` (``reproduces``: for an agent with a reference row of its own name, whether
     each shared metric prints as that row does, IQM and CI ends, at the table's precision)."""
+    # the episode loop here, not at import: its imports would slow ekfslam-benchmark --help
     from .. import __version__
+    from ..evaluation.rollout import evaluate_agent
 
     seeds = protocol_seeds(quick)
     results: dict[str, Any] = {}
@@ -87,6 +89,22 @@ def _cell(metric: Mapping[str, Any] | None) -> str:
         return "—"
     lo, hi = (float("nan") if v is None else v for v in metric["ci"])
     return f"{format_value(metric['iqm'])} [{format_value(lo)}, {format_value(hi)}]"
+
+
+def reference_note(env_id: str, quick: bool = False) -> str:
+    """Which package made the reference rows, from where, and whether a run's row can be read against them."""
+    package = reference()["package"]
+    sources = sorted({f"{r['source']['file']} at {r['source']['commit']}" for r in reference_rows(env_id)})
+    comparable = (
+        "not comparable with this --quick run (5 of the 50 seeds)"
+        if quick
+        else f"comparable: {package['comparable']}"
+    )
+    made = " and ".join(sorted({r.get("package", package["ekfslam-gym"]) for r in reference_rows(env_id)}))
+    return (
+        f"Reference rows: made by ekfslam-gym {made} on {env_id.split(':')[-1]}, from "
+        f"{'; '.join(sources)} (ekfslam_gym/benchmark/reference.json); {comparable}.\n"
+    )
 
 
 def reproduces(result: Mapping[str, Any], row: Mapping[str, Any]) -> dict[str, bool]:
@@ -128,11 +146,6 @@ def markdown(report: Mapping[str, Any], keys: Sequence[str] = TABLE_KEYS) -> str
             text.append(f"Against its reference row: {agreed} of {len(result['reproduces'])} metrics print the "
                         f"same{'' if not differ else '; differ: ' + ', '.join(differ)}.\n")  # fmt: skip
         if result["reference"]:
-            made = reference()["package"]["ekfslam-gym"]
-            sources = sorted(
-                {f"{r['source']['file']} at {r['source']['commit']}" for r in result["reference"]}
-            )
-            text.append(f"Reference rows: ekfslam-gym {made}, from {'; '.join(sources)} "
-                        "(ekfslam_gym/benchmark/reference.json).\n")  # fmt: skip
+            text.append(reference_note(env_id, quick=report["quick"]))
         parts.append("\n".join(text))
     return "\n".join(parts)

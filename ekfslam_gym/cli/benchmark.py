@@ -72,7 +72,13 @@ def _factory(args: argparse.Namespace, parser: argparse.ArgumentParser) -> tuple
             return agent, agent.trained_env_kwargs
 
         return shipped, "ppo", None
-    return (lambda env_id: (make_agent(args.agent, **kwargs), None)), args.agent, None
+    # A registered agent is labelled by its registered name, one of your own (module:Class) by its ``name``.
+    label = (
+        args.agent
+        if ":" not in args.agent
+        else str(getattr(make_agent(args.agent, **kwargs), "name", args.agent))
+    )
+    return (lambda env_id: (make_agent(args.agent, **kwargs), None)), label, None
 
 
 @command_line("benchmark")

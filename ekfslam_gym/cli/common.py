@@ -2,26 +2,23 @@
 
 Every command is installed as ``ekfslam-<name>`` (pyproject.toml's ``[project.scripts]``) and its parser is
 built by ``command_parser(name)``, so that ``--help`` reads ``usage: ekfslam-<name> ...`` however it was started
-(``python -m ekfslam_gym.<name>`` runs the same ``main``).
+(``python -m ekfslam_gym.cli.<name>`` runs the same ``main``).
 
-Bad input ends in one line on stderr, ``ekfslam-<name>: error: <what was wrong>``, and exit status 2, as
-argparse's own ``parser.error`` does; a traceback only when ``EKFSLAM_DEBUG`` is set (to anything but ``0`` or
-the empty string). A ``main`` gets this by ``@command_line("<name>")``:
+Exit statuses: 2 for the user's own input, and only that: argparse's errors, and the checks a ``main`` makes of
+the flags, values and files it was given, each through ``parser.error("--flag: what was wrong; what is
+allowed")`` (one line on stderr, ``ekfslam-<name>: error: ...``). Anything raised deeper is a bug or a broken
+environment, not a usage error: it propagates with its traceback (exit status 1), whatever its type. A ``main``
+gets the rest by ``@command_line("<name>")``:
 
     @command_line("train")
     def main(argv: Sequence[str] | None = None) -> int:
         parser = command_parser("train", description=...)
         args = parser.parse_args(argv)
-        ...  # parser.error("--flag: what was wrong; what is allowed") for the checks main makes itself
+        ...
 
-Errors raised below ``main`` are mapped by type (``USER_ERRORS``): ``ValueError`` (the config's validation
-errors are ValueErrors: ``unknown config field world.n_landmark; known: [...]``), ``KeyError``, ``OSError``
-(a missing file), ``yaml.YAMLError`` and Gymnasium's ``gymnasium.error.Error`` (an unknown env id) exit 2 with
-their message; any other exception is a bug, reported in one line with exit status 1 and the hint to set
-``EKFSLAM_DEBUG=1``; Ctrl-C exits 130. ``SystemExit`` with a status (argparse's, ``--help``'s) passes through
-untouched; ``SystemExit("message")`` is printed as an error and exits 2.
-The wrapper cannot know which flag a deep error came from: checks that can name their flag belong in ``main``
-(``agent_from_flags`` below is one).
+``SystemExit`` with a status (argparse's, ``--help``'s) passes through untouched; ``SystemExit("message")`` is
+printed as an error and exits 2; Ctrl-C exits 130. A command's module imports at its top only what its parser
+needs, and the rest inside ``main`` once the arguments are read, so ``--help`` starts fast.
 """
 
 from __future__ import annotations
@@ -30,25 +27,19 @@ import argparse
 import functools
 import inspect
 import json
-import os
 import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from .. import seeds
-from ..evaluation.rollout import merge_env_kwargs  # noqa: F401  (the command lines read it here)
 
-DEBUG_ENV = "EKFSLAM_DEBUG"
-"""Set this environment variable (``EKFSLAM_DEBUG=1``) to see the traceback of an error instead of one line."""
+AGENT_NAMES: tuple[str, ...] = ("random", "circle", "lawnmower", "greedy", "greedy2", "frontier", "ppo")
+"""The names ``ekfslam_gym.agents.AGENTS`` registers, for the parsers' help: importing the agents (numba, SciPy)
+would triple a ``--help``'s time. tests/test_command_lines.py holds the two equal."""
 
 USAGE_EXIT = 2  # argparse's status for a usage error
-BUG_EXIT = 1
 INTERRUPTED_EXIT = 130  # the shell's 128 + SIGINT
-
-USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, KeyError, OSError)
-"""Exception types that mean bad input (a value, a name, a file); more are added by module when loaded (YAML's and
-Gymnasium's errors, see ``_user_error_types``)."""
 
 
 def prog_name(command: str) -> str:
@@ -61,20 +52,16 @@ def command_parser(command: str, **kwargs: Any) -> argparse.ArgumentParser:
     return argparse.ArgumentParser(prog=prog_name(command), **kwargs)
 
 
-def debugging() -> bool:
-    """Whether ``EKFSLAM_DEBUG`` asks for tracebacks."""
-    return os.environ.get(DEBUG_ENV, "") not in ("", "0")
+def module_docstring(name: str) -> str:
+    """The docstring of module ``name`` read from its source, without running it: a parser's description can
+    quote a heavy module (torch, SB3) and ``--help`` still start fast."""
+    import ast
+    import importlib.util
 
-
-def _user_error_types() -> tuple[type[BaseException], ...]:
-    """``USER_ERRORS`` plus the error bases of YAML and Gymnasium when they are loaded (an error of theirs can only
-    have been raised if they are: no import here)."""
-    extra = []
-    for module, name in (("yaml", "YAMLError"), ("gymnasium.error", "Error")):
-        loaded = sys.modules.get(module)
-        if loaded is not None and isinstance(getattr(loaded, name, None), type):
-            extra.append(getattr(loaded, name))
-    return USER_ERRORS + tuple(extra)
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.origin is None:
+        raise ModuleNotFoundError(f"no module named {name!r}", name=name)
+    return ast.get_docstring(ast.parse(Path(spec.origin).read_text(encoding="utf-8")), clean=False) or ""
 
 
 def error_message(error: BaseException) -> str:
@@ -88,38 +75,31 @@ def error_message(error: BaseException) -> str:
     return " ".join(text.split())  # one line
 
 
+def refuse(parser: argparse.ArgumentParser, flag: str, error: BaseException) -> NoReturn:
+    """``parser.error`` for an input the user named (``flag``: the option, with its value where that helps),
+    with the message of the ``error`` that reading it raised: one line, exit status 2."""
+    parser.error(f"{flag}: {error_message(error)}" if flag else error_message(error))
+
+
 def command_line(command: str, prog: str | None = None) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """Decorate a command's ``main(argv)`` so that bad input ends in one line and exit status 2 (see the module
-    docstring); the decorated ``main`` returns what ``main`` returns (a console script's should be an exit status
-    or None). The lines start with ``prog`` (default ``ekfslam-<command>``): give the parser's ``prog`` where it
-    differs, so that argparse's own errors and the wrapper's read alike."""
+    """Decorate a command's ``main(argv)``: a ``SystemExit("message")`` becomes one line and exit status 2,
+    Ctrl-C one line and 130; everything else passes through (see the module docstring). The lines start with
+    ``prog`` (default ``ekfslam-<command>``)."""
     prog = prog or prog_name(command)
 
     def decorate(main: Callable[..., Any]) -> Callable[..., int]:
         @functools.wraps(main)
         def guarded(*args: Any, **kwargs: Any) -> Any:
-            if debugging():
-                return main(*args, **kwargs)
             try:
                 return main(*args, **kwargs)
             except SystemExit as exit:  # sys.exit("message"): a message in place of a status is an error too
                 if isinstance(exit.code, str):
-                    print(f"{prog}: error: {exit.code}", file=sys.stderr)
+                    print(f"{prog}: error: {' '.join(exit.code.split())}", file=sys.stderr)
                     raise SystemExit(USAGE_EXIT) from None
                 raise
             except KeyboardInterrupt:
                 print(f"{prog}: interrupted", file=sys.stderr)
                 raise SystemExit(INTERRUPTED_EXIT) from None
-            except _user_error_types() as error:
-                print(f"{prog}: error: {error_message(error)}", file=sys.stderr)
-                raise SystemExit(USAGE_EXIT) from None
-            except Exception as error:  # a bug: say so in one line, and how to see where
-                print(
-                    f"{prog}: error: unexpected {type(error).__name__}: {error_message(error)} "
-                    f"(set {DEBUG_ENV}=1 for the traceback)",
-                    file=sys.stderr,
-                )
-                raise SystemExit(BUG_EXIT) from None
 
         return guarded
 

@@ -1,7 +1,7 @@
 """Compare two groups of models evaluated on the same seeds: the difference of their IQMs with a 95 % bootstrap
 CI that resamples the seeds (see ``ekfslam_gym.evaluation.paired``).
 
-python -m ekfslam_gym.compare --a new_s0.json new_s1.json --b old_s0.json old_s1.json [--key "ppo[model]"]
+ekfslam-compare --a new_s0.json new_s1.json --b old_s0.json old_s1.json [--key "ppo[model]"]
     [--metric map_log_det --metric landmark_rmse]
 
 Each FILE holds the per-episode metrics that ``evaluate --episodes-json`` writes ({name: [episodes]}); every
@@ -67,3 +67,7 @@ def main(argv: list[str] | None = None) -> int:
     for r in results:
         print(f"  {r.metric}: {r.a:.4g} - {r.b:.4g} = {r.difference:+.4g} [{r.ci[0]:+.4g}, {r.ci[1]:+.4g}]")
     return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,7 +1,7 @@
 """The filter's consistency under agents' driving, per agent and filter variant (see
 ``ekfslam_gym.evaluation.consistency``): pose NEES, map NEES and NIS per step against their chi-squared bands.
 
-python -m ekfslam_gym.consistency [--env-id EKFSLAM-v0] [--agents random,circle] [--filters ekf,fej,iekf]
+ekfslam-consistency [--env-id EKFSLAM-v0] [--agents random,circle] [--filters ekf,fej,iekf]
     [--seeds 0-49] [--steps 200] [--env-kwargs JSON] [--model PATH] [--json] [--plot FILE.png]
 
 Each value is the sum over runs divided by the summed degrees of freedom (1 when consistent); "inside" is the
@@ -27,7 +27,6 @@ from .common import (
     command_line,
     command_parser,
     json_object,
-    merge_env_kwargs,
     parse_seeds,
 )
 
@@ -82,14 +81,14 @@ def plot_runs(runs: list[ConsistencyRun], path: str) -> None:
 
 @command_line("consistency")
 def main(argv: Sequence[str] | None = None) -> int:
-    import gymnasium as gym
-
-    import ekfslam_gym  # noqa: F401  (registers the ids)
-    from ekfslam_gym.agents import AGENTS, is_agent_name
-    from ekfslam_gym.packaged import shipped_model
-
     parser = _build_parser()
     args = parser.parse_args(argv)
+    import gymnasium as gym
+
+    from ekfslam_gym.agents import AGENTS, is_agent_name
+    from ekfslam_gym.evaluation.rollout import merge_env_kwargs
+    from ekfslam_gym.packaged import shipped_model
+
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
     filters = [f.strip() for f in args.filters.split(",") if f.strip()]
     if unknown := [a for a in agents if not is_agent_name(a)]:
@@ -152,3 +151,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         print(f"{s['label']:<22}{cells}")
     return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

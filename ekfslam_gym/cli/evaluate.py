@@ -2,14 +2,14 @@
 
 Usage::
 
-    python -m ekfslam_gym.evaluate --agent greedy                       # the evaluation seeds, a text summary
-    python -m ekfslam_gym.evaluate --agent greedy --seeds heldout       # the held-out suite: the final table
-    python -m ekfslam_gym.evaluate --agent ppo --model models/ppo_EKFSLAM-v0.zip --json
-    python -m ekfslam_gym.evaluate --compare --model models/ppo_EKFSLAM-v0.zip --table results.md --plot results.png
-    python -m ekfslam_gym.evaluate --agent random,circle --seeds 0-9 --max-episode-steps 100 --gif gifs/
-    python -m ekfslam_gym.evaluate --agent greedy --seeds 0-4 --export-tum tum/   # then: evo_ape tum ...
-    python -m ekfslam_gym.evaluate --agent ppo --env-id EKFSLAM-Large-v0        # the shipped Large policy
-    python -m ekfslam_gym.evaluate --agent myagents:BounceAgent,greedy          # your own agent beside greedy
+    ekfslam-evaluate --agent greedy                       # the evaluation seeds, a text summary
+    ekfslam-evaluate --agent greedy --seeds heldout       # the held-out suite: the final table
+    ekfslam-evaluate --agent ppo --model models/ppo_EKFSLAM-v0.zip --json
+    ekfslam-evaluate --compare --model models/ppo_EKFSLAM-v0.zip --table results.md --plot results.png
+    ekfslam-evaluate --agent random,circle --seeds 0-9 --max-episode-steps 100 --gif gifs/
+    ekfslam-evaluate --agent greedy --seeds 0-4 --export-tum tum/   # then: evo_ape tum ...
+    ekfslam-evaluate --agent ppo --env-id EKFSLAM-Large-v0        # the shipped Large policy
+    ekfslam-evaluate --agent myagents:BounceAgent,greedy          # your own agent beside greedy
 
 ``--agent ppo`` without ``--model`` evaluates the shipped policy of the env id. A saved model brings its env: with
 no ``--env-id`` the evaluation runs on the env its training record names (EKFSLAM-v0 when no agent has a
@@ -34,37 +34,29 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..evaluation.aggregate import summary
-from ..evaluation.episode_metrics import ASSOCIATION_KEYS, METRIC_KEYS, NEES_STEP_BOUNDS
-from ..evaluation.report import json_safe, markdown_table, plot_results, text_summary
-from ..evaluation.rollout import evaluate_agent
-from ..evaluation.smoothing import SMOOTHER_KEYS
+from ..pretrained import DEFAULT_ENV_ID
 from ..seeds import EVAL_SEEDS, HELD_OUT, SUITES, span, suite_name
 from .common import (
+    AGENT_NAMES,
     agent_from_flags,
     check_env_flags,
     command_line,
     command_parser,
     json_object,
-    merge_env_kwargs,
     parse_seeds,
 )
 
 FORMATS = ("blocks", "table", "json")
 
-DEFAULT_ENV_ID = "EKFSLAM-v0"
-
 
 def _build_parser() -> argparse.ArgumentParser:
-    from ekfslam_gym.agents import AGENTS
-
     parser = command_parser(
         "evaluate",
         description=f"Evaluate agents on a seed suite (default: the evaluation seeds {span(EVAL_SEEDS)}; the "
         f"held-out suite {HELD_OUT} by name, --seeds heldout).",
     )
     parser.add_argument("--agent", default=None,
-                        help=f"an agent or a comma-separated list (a comparison); one of {', '.join(AGENTS)}, or "
+                        help=f"an agent or a comma-separated list (a comparison); one of {', '.join(AGENT_NAMES)}, or "
                              "module:Class (a class or factory of your own)")  # fmt: skip
     parser.add_argument("--compare", action="store_true",
                         help="compare random, circle, lawnmower, greedy (and ppo when --model is given)")  # fmt: skip
@@ -158,30 +150,17 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
     return entries
 
 
-def resolve_env_id(agents: Sequence[Any], env_id: str | None, force: bool = False) -> str:
-    """The env to evaluate ``agents`` on: ``env_id`` when given, else the one their training records name (one
-    for all), else ``DEFAULT_ENV_ID``. ValueError when agents were trained on different envs and none is given,
-    or when ``env_id`` is not the one an agent was trained on and not ``force``d."""
-    trained = {a: str(a.trained_env_id) for a in agents if getattr(a, "trained_env_id", None)}
-    if env_id is None:
-        ids = sorted({t.split(":")[-1] for t in trained.values()})
-        if len(ids) > 1:
-            raise ValueError(f"the models were trained on different envs ({', '.join(ids)}); give --env-id "
-                             "(and --force to run them off their own)")  # fmt: skip
-        return ids[0] if ids else DEFAULT_ENV_ID
-    for agent, trained_id in trained.items():
-        if trained_id.split(":")[-1] != env_id.split(":")[-1]:
-            if not force:
-                raise ValueError(f"{agent!r} was trained on {trained_id}, not {env_id}: leave out --env-id to "
-                                 f"evaluate it on {trained_id}, or add --force")  # fmt: skip
-            print(f"warning: {agent!r} was trained on {trained_id}, evaluated on {env_id}", file=sys.stderr)
-    return env_id
-
-
 @command_line("evaluate")
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _build_parser()
     args = parser.parse_args(argv)
+    from ..evaluation.aggregate import summary
+    from ..evaluation.episode_metrics import ASSOCIATION_KEYS, METRIC_KEYS, NEES_STEP_BOUNDS
+    from ..evaluation.report import json_safe, markdown_table, plot_results, text_summary
+    from ..evaluation.rollout import evaluate_agent, merge_env_kwargs
+    from ..evaluation.smoothing import SMOOTHER_KEYS
+    from ..pretrained import resolve_env_id
+
     if args.json and args.format not in (None, "json"):
         parser.error(f"--json is --format json; it contradicts --format {args.format}")
     output = "json" if args.json else args.format or "blocks"

@@ -1,7 +1,7 @@
 """Solve a pose graph from the command line.
 
-    python -m ekfslam_gym.graph FILE [--solver gn|lm] [--settings auto|course|gtsam] [--json] [--plot FILE.png]
-                                     [--backend NAME]
+    ekfslam-graph FILE [--solver gn|lm] [--settings auto|course|gtsam] [--json] [--plot FILE.png]
+                          [--backend NAME]
 
 FILE is a course MAT graph (``.dat``), a 2-D g2o file (``.g2o``) or a GTSAM 2-D dataset (``.txt``/``.graph``,
 e.g. Victoria Park). ``--settings gtsam`` optimises as GTSAM does (its Pose2 retraction, and for LM its λ
@@ -14,13 +14,9 @@ F = Σ eᵀΩe and ``seconds`` times the optimisation alone (reading the file ex
 from __future__ import annotations
 
 import json
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..data.graph_files import GTSAM_SUFFIXES, read_graph
-from ..evaluation.plotting import plot_graph_solution
-from ..graph.optimizer import GTSAM_LM, optimize
 from ..graph.sparse_solve import BACKENDS
 from .common import command_line, command_parser
 
@@ -45,12 +41,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print one JSON object with the figures")
     parser.add_argument("--plot", type=Path, metavar="FILE.png", help="save a plot of the solution")
     args = parser.parse_args(argv)
+    from ..data.graph_files import GTSAM_SUFFIXES, read_graph
+    from ..graph.optimizer import GTSAM_LM, optimize
 
-    try:
-        problem = read_graph(args.file)
-    except (OSError, ValueError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
+    problem = read_graph(args.file)  # a missing or malformed file: one error line and exit 2 (command_line)
     settings = args.settings
     if settings == "auto":
         settings = "gtsam" if args.file.suffix.lower() in GTSAM_SUFFIXES else "course"
@@ -87,9 +81,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{status} after {result.iterations} iterations in {result.seconds:.3f} s ({settings} settings)"
         )
     if args.plot is not None:
+        from ..evaluation.plotting import plot_graph_solution
+
         plot_graph_solution(args.plot, problem.initial, result, title=args.file.name)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    raise SystemExit(main())

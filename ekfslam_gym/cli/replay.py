@@ -1,10 +1,10 @@
 """Replay a drive through EKF-SLAM: the project's simulated drive by default, course-format files, or a real
 robot's data set (``--dataset mrclam``, see ``cli.replay_real``).
 
-    python -m ekfslam_gym.replay [--data PATH [--world PATH]] [--steps N] [--sequential]
+    ekfslam-replay [--data PATH [--world PATH]] [--steps N] [--sequential]
         [--init {course,inverse}] [--seed S] [--json] [--save-state FILE.npz]
         [--plot FILE.png] [--gif FILE.gif] [--tum FILE]
-    python -m ekfslam_gym.replay --data MRCLAM_FOLDER [--dataset mrclam] [--variant {ekf,fej,iekf}]
+    ekfslam-replay --data MRCLAM_FOLDER [--dataset mrclam] [--variant {ekf,fej,iekf}]
         [--association {known,nearest,jcbc}] [--robots] [--smoother] [--json] [--plot FILE.png]
 
 Defaults are the course's EKF-SLAM exercise (Freiburg *Robot Mapping*): R = diag(0.1, 0.1, 0.01) on the pose, Q = 0.01 I per reading, landmark
@@ -26,22 +26,25 @@ import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
-
-from ..angles import wrap_angle
-from ..data.course import read_sensor_data, read_world
-from ..data.synthetic import simulate_drive
-from ..evaluation.replay import ReplayResult, export_tum, replay, summary, true_path_name
-from ..filter import FilterDivergedError
 from ..filter.settings import COURSE_SETTINGS, INIT_MODES
-from .common import command_line, command_parser
+from .common import command_line, command_parser, refuse
 from .replay_real import add_real_data_arguments, replay_real_data, resolve_dataset
+
+if TYPE_CHECKING:
+    from ..data.course import LandmarkMap
+    from ..replay.result import Replay
 
 MAX_GIF_FRAMES = 80  # enough for a smooth loop, few enough to render in seconds
 
 
-def _report(result: ReplayResult, source: str, n_readings: int) -> str:
+def _report(result: Replay, world: LandmarkMap | None, source: str, n_readings: int) -> str:
+    import numpy as np
+
+    from ..angles import wrap_angle
+    from ..replay.course import map_errors, map_rmse
+
     ekf = result.ekf
     x, y, theta = ekf.pose
     lines = [
@@ -50,15 +53,16 @@ def _report(result: ReplayResult, source: str, n_readings: int) -> str:
         f"final pose       x = {x:.6f} m, y = {y:.6f} m, theta = {theta:.6f} rad",
         "pose cov diag    " + ", ".join(f"{v:.6g}" for v in np.diagonal(ekf.pose_cov)),
     ]
-    if result.true_poses is not None:
-        tx, ty, tt = result.true_poses[result.steps]
+    true_poses = result.extras.get("true_poses")
+    if true_poses is not None:
+        tx, ty, tt = true_poses[result.steps]
         heading_error = wrap_angle(theta - tt)
         lines.append(
             f"true pose        x = {tx:.6f} m, y = {ty:.6f} m, theta = {tt:.6f} rad "
             f"(error {math.hypot(x - tx, y - ty):.4f} m, {abs(heading_error):.4f} rad)"
         )
     lines.append(f"log det Sigma    {ekf.log_det:.6f}")
-    truth = result.world.as_dict() if result.world is not None else {}
+    truth = world.as_dict() if world is not None else {}
     lines.append("landmarks        id: estimate" + ("  [truth]  error" if truth else ""))
     for i, (lx, ly) in sorted(result.landmark_estimates().items()):
         line = f"  {i:>4}: ({lx:9.5f}, {ly:9.5f})"
@@ -66,9 +70,9 @@ def _report(result: ReplayResult, source: str, n_readings: int) -> str:
             tx, ty = truth[i]
             line += f"  [{tx:9.5f}, {ty:9.5f}]  {math.hypot(lx - tx, ly - ty):.4f} m"
         lines.append(line)
-    rmse = result.map_rmse()
+    rmse = map_rmse(result, world)
     if rmse is not None:
-        lines.append(f"map RMSE vs world: {rmse:.4f} m over {len(result.map_errors())} landmarks")
+        lines.append(f"map RMSE vs world: {rmse:.4f} m over {len(map_errors(result, world))} landmarks")
     return "\n".join(lines)
 
 
@@ -147,21 +151,28 @@ def main(argv: Sequence[str] | None = None) -> int:
         except ImportError as error:
             parser.error(f"--plot/--gif need the render extra (pip install 'ekfslam-gym[render]'): {error}")
 
+    from ..data.course import read_sensor_data, read_world
+    from ..filter import FilterDivergedError
+    from ..replay.course import landmark_labels, replay, summary
+
     true_poses = None
     if args.data is None:
+        from ..data.synthetic import simulate_drive
+
         seed = 0 if args.seed is None else args.seed
         drive = simulate_drive(seed)
         data, world, true_poses = drive.data, drive.world, drive.poses
         source = f"the simulated drive (seed {seed})"
     else:
-        try:
-            for path in (args.data, args.world):
-                if path is not None and not path.is_file():
-                    parser.error(f"no such file: {path}")
+        for path in (args.data, args.world):
+            if path is not None and not path.is_file():
+                parser.error(f"no such file: {path}")
+        try:  # the files' own errors name them and the line; an id outside the world file names the ids
             data = read_sensor_data(args.data)
             world = read_world(args.world) if args.world is not None else None
+            landmark_labels(data, world)
         except (OSError, ValueError) as error:
-            parser.error(str(error))
+            refuse(parser, "", error)
         source = str(args.data)
     if not len(data):
         parser.error(f"{source} has no ODOMETRY block")
@@ -180,29 +191,27 @@ def main(argv: Sequence[str] | None = None) -> int:
             true_poses=true_poses,
             frame_every=frame_every,
         )
-    except ValueError as error:  # an id outside the world file
-        parser.error(f"{args.data}: {error}")
     except FilterDivergedError as error:
         print(f"error: the filter diverged: {error}", file=sys.stderr)
         return 1
 
-    written = _write_outputs(args, result)
+    written = _write_outputs(args, result, world)
     if args.json:
         print(json.dumps(summary(result), allow_nan=False))
         for line in written:
             print(line, file=sys.stderr)
     else:
-        print(_report(result, source, data.head(steps).n_readings))
+        print(_report(result, world, source, data.head(steps).n_readings))
         for line in written:
             print(line)
     return 0
 
 
-def _write_outputs(args: argparse.Namespace, result: ReplayResult) -> list[str]:
-    from ekfslam_gym.evaluation import plotting
-
+def _write_outputs(args: argparse.Namespace, result: Replay, world: LandmarkMap | None) -> list[str]:
     written = []
     if args.save_state is not None:
+        import numpy as np
+
         np.savez(
             args.save_state,
             mean=np.asarray(result.ekf.mean),
@@ -212,13 +221,20 @@ def _write_outputs(args: argparse.Namespace, result: ReplayResult) -> list[str]:
             observed=np.asarray(result.ekf.observed),
         )
         written.append(f"wrote state to {args.save_state}")
-    if args.plot is not None:
-        plotting.save_png(args.plot, result.frame(), result.world)
-        written.append(f"wrote picture to {args.plot}")
-    if args.gif is not None:
-        plotting.save_gif(args.gif, result.frames, result.world)
-        written.append(f"wrote animation ({len(result.frames)} frames) to {args.gif}")
+    if args.plot is not None or args.gif is not None:
+        from ..evaluation import plotting
+        from ..replay.course import final_frame
+
+        if args.plot is not None:
+            plotting.save_png(args.plot, final_frame(result), world)
+            written.append(f"wrote picture to {args.plot}")
+        if args.gif is not None:
+            frames = result.extras["frames"]
+            plotting.save_gif(args.gif, frames, world)
+            written.append(f"wrote animation ({len(frames)} frames) to {args.gif}")
     if args.tum is not None:
+        from ..replay.course import export_tum, true_path_name
+
         paths = export_tum(result, args.tum)
         truth = f", the true one to {true_path_name(args.tum)}" if len(paths) > 1 else " (no true trajectory)"
         written.append(f"wrote the estimated trajectory (TUM) to {args.tum}{truth}")

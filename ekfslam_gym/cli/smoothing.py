@@ -1,6 +1,6 @@
 """Filter vs the full-SLAM smoother on env episodes (see ``ekfslam_gym.evaluation.smoothing``).
 
-python -m ekfslam_gym.smoothing [--env-id EKFSLAM-v0] [--seeds 20000-20004] [--agent circle] [--json]
+ekfslam-smoothing [--env-id EKFSLAM-v0] [--seeds 20000-20004] [--agent circle] [--json]
 """
 
 from __future__ import annotations
@@ -9,18 +9,12 @@ import argparse
 import json
 import sys
 
-from ..evaluation.rollout import run_episode
-from ..evaluation.smoothing import EpisodeRecorder, compare_with_smoother
 from ..seeds import EVAL_SEEDS, span
 from .common import agent_from_flags, check_env_flags, command_line, command_parser, parse_seeds
 
 
 @command_line("smoothing")
 def main(argv: list[str] | None = None) -> int:
-    import gymnasium as gym
-
-    import ekfslam_gym  # noqa: F401  (registers the ids)
-
     parser = command_parser(
         "smoothing", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
@@ -30,6 +24,11 @@ def main(argv: list[str] | None = None) -> int:
                         help="evaluation seeds by default; A-B, A,B,C or a suite's name (heldout, eval)")  # fmt: skip
     parser.add_argument("--json", action="store_true", help="print one JSON list of the per-seed rows")
     args = parser.parse_args(argv)
+    import gymnasium as gym
+
+    from ..evaluation.rollout import run_episode
+    from ..evaluation.smoothing import EpisodeRecorder, compare_with_smoother
+
     check_env_flags(parser, args.env_id)
     rows = []
     for seed in args.seeds:

@@ -2,8 +2,8 @@
 
 Usage::
 
-    python -m ekfslam_gym.sweep --env-ids EKFSLAM-v0 --seeds 0-4 --timesteps 200000 --out runs/sweep
-    python -m ekfslam_gym.sweep --env-ids EKFSLAM-v0,EKFSLAM-Loop-v0 --seeds 0-2 --address auto --json
+    ekfslam-sweep --env-ids EKFSLAM-v0 --seeds 0-4 --timesteps 200000 --out runs/sweep
+    ekfslam-sweep --env-ids EKFSLAM-v0,EKFSLAM-Loop-v0 --seeds 0-2 --address auto --json
 
 Each (env id, seed) trains as ``python train.py --config CONFIG --env-id ID --seed S`` would (into
 ``OUT/<env-id>_seed<S>/``) and its final model is evaluated on ``--eval-seeds`` (default the evaluation seeds
@@ -118,12 +118,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.config = resolve_config(args.config).resolve()
     except FileNotFoundError as error:
         parser.error(str(error))
-    hyperparams = settings.parse_hyperparams(args.hyperparams)
+    try:
+        hyperparams = settings.parse_hyperparams(args.hyperparams)
+    except settings.SettingsError as error:
+        parser.error(str(error))
 
     trials = []
     for env_id in env_ids:
-        entry = settings.resolve_entry(args.config, env_id, hyperparams, timesteps=args.timesteps)
-        try:  # every trial's settings, checked before any runs
+        try:  # every trial's settings (the config's entry, --hyperparams), checked before any runs
+            entry = settings.resolve_entry(args.config, env_id, hyperparams, timesteps=args.timesteps)
             entry = settings.validate_entry(entry, env_id)
             for seed in args.seeds:
                 check_not_held_out(

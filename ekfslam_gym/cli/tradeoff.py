@@ -1,7 +1,7 @@
 """Plot two metrics against each other for many models at once, and list the ones no other model beats on both
 (see ``ekfslam_gym.evaluation.tradeoff``).
 
-python -m ekfslam_gym.tradeoff runs/a.json runs/b.json --label "PPO seeds" --label planners --plot out.png
+ekfslam-tradeoff runs/a.json runs/b.json --label "PPO seeds" --label planners --plot out.png
 
 Each FILE is either the per-episode metrics that ``evaluate --episodes-json`` writes ({name: [episodes]}), one
 group of points named by its --label (in order) or by the file's stem, or a CSV of points this command wrote
@@ -77,11 +77,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--annotate", action="append", default=[], metavar="GROUP", help="name this group's points"
     )
-    line_help = "a labelled reference line; write a negative one as --x-line=-224:TEXT"
+    line_help = "a labelled reference line at x = VALUE; write a negative one as --{}-line=-224:TEXT"
     parser.add_argument("--x-line", action="append", default=[], type=_reference_line, metavar="VALUE:TEXT",
-                        help=line_help)  # fmt: skip
+                        help=line_help.format("x"))  # fmt: skip
     parser.add_argument("--y-line", action="append", default=[], type=_reference_line, metavar="VALUE:TEXT",
-                        help=line_help)  # fmt: skip
+                        help=line_help.replace("x =", "y =").format("y"))  # fmt: skip
     parser.add_argument("--title", help="the figure's title")
     args = parser.parse_args(argv)
 

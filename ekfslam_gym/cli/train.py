@@ -25,15 +25,12 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..packaged import DEFAULT_CONFIG, config_names, resolve_config
-from ..training import artefacts
-from ..training.artefacts import read_run
-from ..training.run import train
-from ..training.settings import SettingsError, parse_hyperparams, resolve_entry
-from .common import command_parser
+from .common import command_line, command_parser, module_docstring
 
 
 def build_parser() -> argparse.ArgumentParser:
-    folder = artefacts.__doc__[artefacts.__doc__.index("The folder's files") :]
+    artefacts = module_docstring("ekfslam_gym.training.artefacts")  # imported, it would bring torch
+    folder = artefacts[artefacts.index("The folder's files") :]
     parser = command_parser(
         "train", description=f"{__doc__}\n{folder}", formatter_class=argparse.RawDescriptionHelpFormatter
     )
@@ -58,17 +55,22 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@command_line("train")
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python train.py ...``: parse the command line and ``train``; 0 when the run is done (a bad setting
-    exits with argparse's status 2 and one line naming it). Errors from inside the run are raised as they are;
-    ``command_line("train")(main)`` turns them into one line too, as ``train.py`` runs it."""
+    """``ekfslam-train`` and ``python train.py``: parse the command line and ``train``; 0 when the run is done.
+    A bad setting or file ends in one line naming it and exit status 2; training (torch, SB3) is imported only
+    once the arguments are read."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    from ..training.artefacts import read_run
+    from ..training.run import train
+    from ..training.settings import SettingsError, parse_hyperparams, resolve_entry
+
     command = sys.argv[1:] if argv is None else list(argv)
     if args.resume is not None:
         try:
             env_id, seed, entry = read_run(args.resume)
-        except FileNotFoundError as error:
+        except (FileNotFoundError, ValueError) as error:  # no record, or not a complete one
             parser.error(str(error))
         if args.timesteps is not None:
             entry["n_timesteps"] = args.timesteps
@@ -76,11 +78,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     else:
         try:
             args.config = resolve_config(args.config)
-        except FileNotFoundError as error:
+            env_id, seed = args.env_id, args.seed
+            entry = resolve_entry(args.config, env_id, parse_hyperparams(args.hyperparams),
+                                  timesteps=args.timesteps, n_envs=args.n_envs)  # fmt: skip
+        except (FileNotFoundError, SettingsError) as error:
             parser.error(str(error))
-        env_id, seed = args.env_id, args.seed
-        entry = resolve_entry(args.config, env_id, parse_hyperparams(args.hyperparams),
-                              timesteps=args.timesteps, n_envs=args.n_envs)  # fmt: skip
         out = args.out or Path("runs") / f"{env_id}_seed{seed}"
     try:
         train(env_id, seed, entry, out, resume=args.resume is not None, progress=not args.no_progress,
@@ -88,3 +90,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SettingsError as error:  # raised before anything is created
         parser.error(str(error))
     return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -7,18 +7,19 @@ frame). ``world.dat`` holds one ``id x y`` line per ground-truth landmark.
 Every block is read, the last one included (the course's Octave reader drops it: 330 steps instead of 331).
 Values are kept exactly as written: the course file has a negative range and bearings outside (-pi, pi],
 which are real data; the filter wraps the innovation, not the reading. Malformed lines raise ``ValueError``
-with ``file:line`` in the message so a broken file is found without a debugger.
+with ``file:line`` in the message (``data.records``) so a broken file is found without a debugger.
 """
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from .records import ENCODING, Record, read_records
 
 __all__ = [
     "CourseData",
@@ -120,45 +121,15 @@ class LandmarkMap:
 # --------------------------------------------------------------------------------------------------- parsing
 
 
-def _lines(path: Path) -> Iterator[tuple[int, list[str]]]:
-    """Yield (1-based line number, tokens) for the non-blank lines of a file."""
-    with path.open("r", encoding="ascii", errors="replace") as handle:
-        for number, line in enumerate(handle, start=1):
-            tokens = line.split()
-            if tokens:
-                yield number, tokens
-
-
-def _float(token: str, what: str, where: str) -> float:
-    try:
-        value = float(token)
-    except ValueError:
-        raise ValueError(f"{where}: {what} {token!r} is not a number") from None
-    if not math.isfinite(value):
-        raise ValueError(f"{where}: {what} {token!r} is not finite")
-    return value
-
-
-def _id(token: str, where: str) -> int:
-    try:
-        value = int(token)
-    except ValueError:
-        raise ValueError(f"{where}: landmark id {token!r} is not an integer") from None
+def _id(record: Record, index: int) -> int:
+    value = record.integer(index, "landmark id")
     if value < 1:
-        raise ValueError(f"{where}: landmark id {value} is not 1-based (must be >= 1)")
+        raise record.error(f"landmark id {value} is not 1-based (must be >= 1)")
     return value
-
-
-def _expect(tokens: list[str], count: int, where: str) -> None:
-    if len(tokens) != count:
-        raise ValueError(
-            f"{where}: {tokens[0]} line needs {count - 1} values, got {len(tokens) - 1}: {' '.join(tokens)!r}"
-        )
 
 
 def read_sensor_data(path: PathLike) -> CourseData:
     """Read every block of a ``sensor_data.dat`` file (331 steps for the course file)."""
-    path = Path(path)
     steps: list[Step] = []
     odometry: list[float] | None = None
     ids: list[int] = []
@@ -168,46 +139,38 @@ def read_sensor_data(path: PathLike) -> CourseData:
         if odometry is not None:
             steps.append(Step(np.array(odometry), np.array(ids, dtype=np.int64), np.array(z).reshape(-1, 2)))
 
-    for number, tokens in _lines(path):
-        where = f"{path}:{number}"
-        tag = tokens[0]
+    for record in read_records(path, comment=None):
+        tag = record.tokens[0]
         if tag == "ODOMETRY":
-            _expect(tokens, 4, where)
-            values = [_float(t, name, where) for t, name in zip(tokens[1:], ("r1", "t", "r2"), strict=True)]
+            record.expect(3, tag, tagged=True)
+            values = [record.number(i, name) for i, name in enumerate(("r1", "t", "r2"), start=1)]
             flush()
             odometry, ids, z = values, [], []
         elif tag == "SENSOR":
-            _expect(tokens, 4, where)
+            record.expect(3, tag, tagged=True)
             if odometry is None:
-                raise ValueError(f"{where}: SENSOR line before any ODOMETRY line")
-            ids.append(_id(tokens[1], where))
-            z.append([_float(tokens[2], "range", where), _float(tokens[3], "bearing", where)])
+                raise record.error("SENSOR line before any ODOMETRY line")
+            ids.append(_id(record, 1))
+            z.append([record.number(2, "range"), record.number(3, "bearing")])
         else:
-            raise ValueError(f"{where}: unknown tag {tag!r} (expected ODOMETRY or SENSOR)")
+            raise record.error(f"unknown tag {tag!r} (expected ODOMETRY or SENSOR)")
     flush()  # the last block too: the course's reader drops it, we do not
     return CourseData(steps)
 
 
 def read_world(path: PathLike) -> LandmarkMap:
     """Read a ``world.dat`` file: one ``id x y`` line per landmark, ids distinct and 1-based."""
-    path = Path(path)
     ids: list[int] = []
     positions: list[list[float]] = []
     first_line: dict[int, int] = {}
-    for number, tokens in _lines(path):
-        where = f"{path}:{number}"
-        if len(tokens) != 3:
-            raise ValueError(
-                f"{where}: world line needs 3 values (id x y), got {len(tokens)}: {' '.join(tokens)!r}"
-            )
-        landmark = _id(tokens[0], where)
+    for record in read_records(path, comment=None):
+        record.expect(3, "world (id x y)")
+        landmark = _id(record, 0)
         if landmark in first_line:
-            raise ValueError(
-                f"{where}: landmark id {landmark} already defined on line {first_line[landmark]}"
-            )
-        first_line[landmark] = number
+            raise record.error(f"landmark id {landmark} already defined on line {first_line[landmark]}")
+        first_line[landmark] = record.line
         ids.append(landmark)
-        positions.append([_float(tokens[1], "x", where), _float(tokens[2], "y", where)])
+        positions.append([record.number(1, "x"), record.number(2, "y")])
     return LandmarkMap(np.array(ids, dtype=np.int64), np.array(positions, dtype=float).reshape(-1, 2))
 
 
@@ -229,7 +192,7 @@ def _format_steps(steps: Iterable[Step]) -> Iterator[str]:
 def write_sensor_data(path: PathLike, data: CourseData) -> Path:
     """Write ``data`` in the ``sensor_data.dat`` format; reading it back gives identical numbers."""
     path = Path(path)
-    with path.open("w", encoding="ascii", newline="\n") as handle:
+    with path.open("w", encoding=ENCODING, newline="\n") as handle:
         handle.writelines(_format_steps(data.steps))
     return path
 
@@ -237,7 +200,7 @@ def write_sensor_data(path: PathLike, data: CourseData) -> Path:
 def write_world(path: PathLike, world: LandmarkMap) -> Path:
     """Write ``world`` in the ``world.dat`` format (file order kept); reading it back is exact."""
     path = Path(path)
-    with path.open("w", encoding="ascii", newline="\n") as handle:
+    with path.open("w", encoding=ENCODING, newline="\n") as handle:
         for landmark, (x, y) in zip(world.ids, world.positions, strict=True):
             handle.write(f"{int(landmark)} {_fmt(x)} {_fmt(y)}\n")
     return path

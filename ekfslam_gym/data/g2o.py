@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..graph.optimizer import FactorGraph, GraphProblem, Values
+from .records import read_records
 
 __all__ = ["read_g2o", "write_g2o"]
 
@@ -40,37 +41,33 @@ def read_g2o(path: str | os.PathLike[str]) -> GraphProblem:
     def fail(line_no: int, message: str) -> ValueError:
         return ValueError(f"{path}:{line_no}: {message}")
 
-    with open(path, encoding="utf-8") as stream:
-        for line_no, line in enumerate(stream, start=1):
-            fields = line.split("#", 1)[0].split()
-            if not fields:
-                continue
-            tag = fields[0]
-            if tag not in _FIELDS:
-                raise fail(line_no, f"unsupported tag {tag!r} (expected one of {', '.join(_FIELDS)})")
-            if len(fields) - 1 != _FIELDS[tag]:
-                raise fail(line_no, f"{tag} needs {_FIELDS[tag]} values, found {len(fields) - 1}")
-            try:
-                ids = [int(f) for f in fields[1 : 2 if tag.startswith("VERTEX") else 3]]
-                numbers = [float(f) for f in fields[1 + len(ids) :]]
-            except ValueError as exc:
-                raise fail(line_no, f"malformed {tag} line: {exc}") from None
-            if not all(math.isfinite(v) for v in numbers):
-                raise fail(line_no, f"{tag} has a non-finite value")
-            if tag.startswith("VERTEX"):
-                vid = ids[0]
-                if vid in pose_index or vid in landmark_index:
-                    raise fail(line_no, f"vertex {vid} defined twice")
-                if tag == "VERTEX_SE2":
-                    pose_index[vid] = len(poses)
-                    poses.append(numbers)
-                else:
-                    landmark_index[vid] = len(landmarks)
-                    landmarks.append(numbers)
-            elif tag == "EDGE_SE2":
-                between.append((line_no, ids[0], ids[1], numbers))
+    for record in read_records(path):
+        fields, line_no = record.tokens, record.line
+        tag = fields[0]
+        if tag not in _FIELDS:
+            raise record.error(f"unsupported tag {tag!r} (expected one of {', '.join(_FIELDS)})")
+        record.expect(_FIELDS[tag], tag, tagged=True)
+        try:
+            ids = [int(f) for f in fields[1 : 2 if tag.startswith("VERTEX") else 3]]
+            numbers = [float(f) for f in fields[1 + len(ids) :]]
+        except ValueError as exc:
+            raise record.error(f"malformed {tag} line: {exc}") from None
+        if not all(math.isfinite(v) for v in numbers):
+            raise record.error(f"{tag} has a non-finite value")
+        if tag.startswith("VERTEX"):
+            vid = ids[0]
+            if vid in pose_index or vid in landmark_index:
+                raise record.error(f"vertex {vid} defined twice")
+            if tag == "VERTEX_SE2":
+                pose_index[vid] = len(poses)
+                poses.append(numbers)
             else:
-                pose_landmark.append((line_no, ids[0], ids[1], numbers))
+                landmark_index[vid] = len(landmarks)
+                landmarks.append(numbers)
+        elif tag == "EDGE_SE2":
+            between.append((line_no, ids[0], ids[1], numbers))
+        else:
+            pose_landmark.append((line_no, ids[0], ids[1], numbers))
 
     def resolve(line_no: int, vid: int, table: dict[int, int], what: str) -> int:
         if vid not in table:

@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..graph.optimizer import FactorGraph, GraphProblem, Values
+from .records import read_records
 
 __all__ = ["NOISE_FORMATS", "Gtsam2dDataset", "read_gtsam2d"]
 
@@ -160,7 +161,6 @@ def read_gtsam2d(path: str | os.PathLike[str], noise_format: str = "auto") -> Gt
     if noise_format not in NOISE_FORMATS:
         raise ValueError(f"unknown noise_format {noise_format!r}; expected one of {NOISE_FORMATS}")
     path = Path(path)
-    name = path.name
     pose_vertices: dict[int, tuple[float, float, float]] = {}
     landmark_vertices: dict[int, tuple[float, float]] = {}
     edges: list[tuple[int, int, int, tuple[float, ...], Array]] = []  # line, i, j, (dx, dy, dθ), covariance
@@ -169,71 +169,63 @@ def read_gtsam2d(path: str | os.PathLike[str], noise_format: str = "auto") -> Gt
     warned_anisotropic = False
     noise_cache: dict[tuple[float, ...], Array] = {}  # files tend to repeat one noise line: read each once
 
-    with open(path, encoding="utf-8") as stream:
-        for line_no, line in enumerate(stream, start=1):
-            fields = line.split("#", 1)[0].split()
-            if not fields:
-                continue
+    for record in read_records(path):
+        fields, line_no, fail = record.tokens, record.line, record.error
+        tag = fields[0]
+        if tag not in _FIELDS:
+            raise fail(f"unknown tag {tag!r} (expected one of {', '.join(_FIELDS)})")
+        n_ids, n_numbers = _FIELDS[tag]
+        record.expect(n_ids + n_numbers, tag, tagged=True)
+        try:
+            ids = [int(f) for f in fields[1 : 1 + n_ids]]
+        except ValueError:
+            raise fail(f"{tag} ids must be integers, got {' '.join(fields[1 : 1 + n_ids])}") from None
+        if any(i < 0 for i in ids):
+            raise fail(f"{tag} ids must be non-negative, got {' '.join(fields[1 : 1 + n_ids])}")
+        try:
+            numbers = [float(f) for f in fields[1 + n_ids :]]
+        except ValueError as exc:
+            raise fail(f"malformed {tag} line: {exc}") from None
+        if not all(math.isfinite(v) for v in numbers):
+            raise fail(f"{tag} has a non-finite value")
 
-            def fail(message: str, line_no: int = line_no) -> ValueError:
-                return ValueError(f"{name}:{line_no}: {message}")
-
-            tag = fields[0]
-            if tag not in _FIELDS:
-                raise fail(f"unknown tag {tag!r} (expected one of {', '.join(_FIELDS)})")
-            n_ids, n_numbers = _FIELDS[tag]
-            if len(fields) - 1 != n_ids + n_numbers:
-                raise fail(f"{tag} needs {n_ids + n_numbers} fields, got {len(fields) - 1}")
-            try:
-                ids = [int(f) for f in fields[1 : 1 + n_ids]]
-            except ValueError:
-                raise fail(f"{tag} ids must be integers, got {' '.join(fields[1 : 1 + n_ids])}") from None
-            if any(i < 0 for i in ids):
-                raise fail(f"{tag} ids must be non-negative, got {' '.join(fields[1 : 1 + n_ids])}")
-            try:
-                numbers = [float(f) for f in fields[1 + n_ids :]]
-            except ValueError as exc:
-                raise fail(f"malformed {tag} line: {exc}") from None
-            if not all(math.isfinite(v) for v in numbers):
-                raise fail(f"{tag} has a non-finite value")
-
-            if tag in _POSE_VERTEX or tag == "VERTEX_XY":
-                table = pose_vertices if tag in _POSE_VERTEX else landmark_vertices
-                if ids[0] in table:
-                    raise fail(f"{'pose' if table is pose_vertices else 'landmark'} {ids[0]} defined twice")
-                table[ids[0]] = tuple(numbers)  # type: ignore[assignment]
-            elif tag in _EDGE:
-                if ids[0] == ids[1]:
-                    raise fail(f"{tag} from pose {ids[0]} to itself")
-                key = tuple(numbers[3:])
-                if key not in noise_cache:
-                    noise_cache[key] = _noise_matrix(numbers[3:], noise_format, fail)
-                covariance = noise_cache[key]
-                order.append(("edge", len(edges)))
-                edges.append((line_no, ids[0], ids[1], tuple(numbers[:3]), covariance))
-            else:
-                if tag == "BR":
-                    bearing, rng, bearing_std, range_std = numbers
-                    if bearing_std <= 0 or range_std <= 0:
-                        raise fail("BR standard deviations must be positive")
-                else:  # LANDMARK
-                    x, y, v1, _, v3 = numbers
-                    bearing, rng = math.atan2(y, x), math.hypot(x, y)
-                    if abs(v1 - v3) < _ISOTROPIC_TOLERANCE:
-                        if v1 <= 0:
-                            raise fail(f"LANDMARK variance must be positive, got {v1}")
-                        bearing_std, range_std = math.sqrt(v1 / 10.0), math.sqrt(v1)
-                    else:
-                        bearing_std = range_std = 1.0
-                        if not warned_anisotropic:
-                            warnings.warn(
-                                f"{name}:{line_no}: LANDMARK covariance is not isotropic; like GTSAM's load2D, "
-                                "the reader ignores it and uses unit sigmas",
-                                stacklevel=2,
-                            )
-                            warned_anisotropic = True
-                order.append(("reading", len(readings)))
-                readings.append((line_no, ids[0], ids[1], rng, bearing, range_std, bearing_std))
+        if tag in _POSE_VERTEX or tag == "VERTEX_XY":
+            table = pose_vertices if tag in _POSE_VERTEX else landmark_vertices
+            if ids[0] in table:
+                raise fail(f"{'pose' if table is pose_vertices else 'landmark'} {ids[0]} defined twice")
+            table[ids[0]] = tuple(numbers)  # type: ignore[assignment]
+        elif tag in _EDGE:
+            if ids[0] == ids[1]:
+                raise fail(f"{tag} from pose {ids[0]} to itself")
+            key = tuple(numbers[3:])
+            if key not in noise_cache:
+                noise_cache[key] = _noise_matrix(numbers[3:], noise_format, fail)
+            covariance = noise_cache[key]
+            order.append(("edge", len(edges)))
+            edges.append((line_no, ids[0], ids[1], tuple(numbers[:3]), covariance))
+        else:
+            if tag == "BR":
+                bearing, rng, bearing_std, range_std = numbers
+                if bearing_std <= 0 or range_std <= 0:
+                    raise fail("BR standard deviations must be positive")
+            else:  # LANDMARK
+                x, y, v1, _, v3 = numbers
+                bearing, rng = math.atan2(y, x), math.hypot(x, y)
+                if abs(v1 - v3) < _ISOTROPIC_TOLERANCE:
+                    if v1 <= 0:
+                        raise fail(f"LANDMARK variance must be positive, got {v1}")
+                    bearing_std, range_std = math.sqrt(v1 / 10.0), math.sqrt(v1)
+                else:
+                    bearing_std = range_std = 1.0
+                    if not warned_anisotropic:
+                        warnings.warn(
+                            f"{record.where}: LANDMARK covariance is not isotropic; like GTSAM's load2D, "
+                            "the reader ignores it and uses unit sigmas",
+                            stacklevel=2,
+                        )
+                        warned_anisotropic = True
+            order.append(("reading", len(readings)))
+            readings.append((line_no, ids[0], ids[1], rng, bearing, range_std, bearing_std))
 
     # Initial values in file order, as load2D inserts them.
     pose_values: dict[int, tuple[float, float, float]] = dict(pose_vertices)
@@ -253,7 +245,7 @@ def read_gtsam2d(path: str | os.PathLike[str], noise_format: str = "auto") -> Gt
                 landmark_values[lm] = (xi + rng * math.cos(thi + bearing), yi + rng * math.sin(thi + bearing))
 
     if not pose_values:
-        raise ValueError(f"{name}: no poses (no VERTEX, ODOMETRY/EDGE, LANDMARK or BR line)")
+        raise ValueError(f"{path}: no poses (no VERTEX, ODOMETRY/EDGE, LANDMARK or BR line)")
     pose_ids = np.array(sorted(pose_values), dtype=np.int64)
     landmark_ids = np.array(sorted(landmark_values), dtype=np.int64)
     pose_index = {int(v): k for k, v in enumerate(pose_ids)}

@@ -11,7 +11,7 @@ folder holds, as whitespace-separated text with ``#`` comment lines:
 
 A barcode is read on the other robots as well as on the landmarks: those readings are moving objects, not
 landmarks, and ``MRCLAMRun.landmark_readings`` leaves them out. Times are Unix seconds on one clock shared by
-odometry and measurements. Malformed lines raise ``ValueError`` naming ``file:line``.
+odometry and measurements. Malformed lines raise ``ValueError`` naming ``file:line`` (``data.records``).
 """
 
 from __future__ import annotations
@@ -24,7 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .course import LandmarkMap, _float
+from .course import LandmarkMap
+from .records import Record, read_records
 
 __all__ = [
     "ROBOT_SUBJECTS",
@@ -118,47 +119,27 @@ class MRCLAMRun:
 # --------------------------------------------------------------------------------------------------- parsing
 
 
-def _rows(path: Path, columns: int, what: str) -> Iterator[tuple[str, list[str]]]:
-    """``(where, tokens)`` for each data line (not blank, not a ``#`` comment), checking the column count."""
-    with path.open("r", encoding="ascii", errors="replace") as handle:
-        for number, line in enumerate(handle, start=1):
-            text = line.split("#", 1)[0]
-            tokens = text.split()
-            if not tokens:
-                continue
-            where = f"{path}:{number}"
-            if len(tokens) != columns:
-                raise ValueError(
-                    f"{where}: {what} line needs {columns} values, got {len(tokens)}: {line.strip()!r}"
-                )
-            yield where, tokens
+def _rows(path: Path, columns: int, what: str) -> Iterator[Record]:
+    """The records of a data file (``#`` starts a comment), each checked to hold ``columns`` values."""
+    for record in read_records(path):
+        record.expect(columns, what)
+        yield record
 
 
-def _int(token: str, what: str, where: str) -> int:
-    try:
-        value = int(token)
-    except ValueError:
-        raise ValueError(f"{where}: {what} {token!r} is not an integer") from None
-    if value < 0:
-        raise ValueError(f"{where}: {what} {value} is negative")
-    return value
-
-
-def _check_time(time: float, previous: float, where: str) -> None:
+def _check_time(time: float, previous: float, record: Record) -> None:
     if time < previous:
-        raise ValueError(f"{where}: time {time!r} goes back (previous line {previous!r})")
+        raise record.error(f"time {time!r} goes back (previous line {previous!r})")
 
 
 def read_odometry(path: PathLike) -> Odometry:
     """Read a ``RobotN_Odometry.dat`` file: ``time v omega`` per line, times non-decreasing."""
-    path = Path(path)
     rows: list[tuple[float, float, float]] = []
     previous = -math.inf
-    for where, tokens in _rows(path, 3, "odometry (time v omega)"):
-        time = _float(tokens[0], "time", where)
-        _check_time(time, previous, where)
+    for record in _rows(Path(path), 3, "odometry (time v omega)"):
+        time = record.number(0, "time")
+        _check_time(time, previous, record)
         previous = time
-        rows.append((time, _float(tokens[1], "v", where), _float(tokens[2], "omega", where)))
+        rows.append((time, record.number(1, "v"), record.number(2, "omega")))
     array = np.array(rows, dtype=float).reshape(-1, 3)
     return Odometry(array[:, 0].copy(), array[:, 1].copy(), array[:, 2].copy())
 
@@ -166,20 +147,19 @@ def read_odometry(path: PathLike) -> Odometry:
 def read_measurements(path: PathLike) -> Measurements:
     """Read a ``RobotN_Measurement.dat`` file: ``time barcode range bearing`` per line, times non-decreasing,
     ranges positive."""
-    path = Path(path)
     times: list[float] = []
     barcodes: list[int] = []
     z: list[tuple[float, float]] = []
     previous = -math.inf
-    for where, tokens in _rows(path, 4, "measurement (time barcode range bearing)"):
-        time = _float(tokens[0], "time", where)
-        _check_time(time, previous, where)
+    for record in _rows(Path(path), 4, "measurement (time barcode range bearing)"):
+        time = record.number(0, "time")
+        _check_time(time, previous, record)
         previous = time
-        reading = (_float(tokens[2], "range", where), _float(tokens[3], "bearing", where))
+        reading = (record.number(2, "range"), record.number(3, "bearing"))
         if reading[0] <= 0.0:
-            raise ValueError(f"{where}: range {tokens[2]!r} is not positive")
+            raise record.error(f"range {record.tokens[2]!r} is not positive")
         times.append(time)
-        barcodes.append(_int(tokens[1], "barcode", where))
+        barcodes.append(record.integer(1, "barcode", minimum=0))
         z.append(reading)
     return Measurements(
         np.array(times, dtype=float),
@@ -190,33 +170,31 @@ def read_measurements(path: PathLike) -> Measurements:
 
 def read_barcodes(path: PathLike) -> dict[int, int]:
     """Read ``Barcodes.dat``: ``{subject: barcode}``, both distinct."""
-    path = Path(path)
     barcodes: dict[int, int] = {}
     line_of: dict[int, str] = {}
-    for where, tokens in _rows(path, 2, "barcode (subject barcode)"):
-        subject = _int(tokens[0], "subject", where)
-        barcode = _int(tokens[1], "barcode", where)
+    for record in _rows(Path(path), 2, "barcode (subject barcode)"):
+        subject = record.integer(0, "subject", minimum=0)
+        barcode = record.integer(1, "barcode", minimum=0)
         if subject in barcodes:
-            raise ValueError(f"{where}: subject {subject} already has a barcode ({line_of[subject]})")
+            raise record.error(f"subject {subject} already has a barcode ({line_of[subject]})")
         if barcode in barcodes.values():
-            raise ValueError(f"{where}: barcode {barcode} already belongs to another subject")
+            raise record.error(f"barcode {barcode} already belongs to another subject")
         barcodes[subject] = barcode
-        line_of[subject] = where
+        line_of[subject] = record.where
     return barcodes
 
 
 def read_landmark_truth(path: PathLike) -> tuple[LandmarkMap, np.ndarray]:
     """Read ``Landmark_Groundtruth.dat``: the landmarks by subject (sorted) and their survey std (n, 2) m."""
-    path = Path(path)
     ids: list[int] = []
     rows: list[list[float]] = []
-    for where, tokens in _rows(path, 5, "landmark (subject x y std_x std_y)"):
-        subject = _int(tokens[0], "subject", where)
+    for record in _rows(Path(path), 5, "landmark (subject x y std_x std_y)"):
+        subject = record.integer(0, "subject", minimum=0)
         if subject in ids:
-            raise ValueError(f"{where}: landmark subject {subject} is listed twice")
-        values = [_float(t, name, where) for t, name in zip(tokens[1:], ("x", "y", "std_x", "std_y"))]
+            raise record.error(f"landmark subject {subject} is listed twice")
+        values = [record.number(i, name) for i, name in enumerate(("x", "y", "std_x", "std_y"), start=1)]
         if values[2] < 0 or values[3] < 0:
-            raise ValueError(f"{where}: a standard deviation is negative")
+            raise record.error("a standard deviation is negative")
         ids.append(subject)
         rows.append(values)
     table = np.array(rows, dtype=float).reshape(-1, 4)

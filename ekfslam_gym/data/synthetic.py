@@ -6,7 +6,7 @@
   motion model (r1, t, r2) with small Gaussian noise; range-bearing readings of the landmarks within
   ``max_range`` (and the optional field of view) carry Gaussian noise of sigma 0.1 m and 0.1 rad, which is
   what the course's measurement model Q = 0.01 I assumes. Ids are 1-based as in the course files. This is
-  what ``python -m ekfslam_gym.replay`` replays by default; ``python -m ekfslam_gym.data.drive DIR`` writes it
+  what ``ekfslam-replay`` replays by default; ``python -m ekfslam_gym.cli.drive DIR`` writes it
   as ``sensor_data.dat`` and ``world.dat``.
 - ``synthetic_drive``: a drive for testing and benchmarking the smoother and graph solver. A robot steers
   towards random waypoints in a square arena at constant step length; odometry (r1, t, r2) is the true motion

@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .records import ENCODING, read_records
+
 __all__ = [
     "LANDMARK_COLUMNS",
     "TUM_HEADER",
@@ -57,22 +59,20 @@ def write_tum(path: str | os.PathLike[str], timestamps: np.ndarray, poses: np.nd
     for t, row in zip(timestamps.tolist(), columns.tolist()):
         lines.append(f"{t:.9f} " + " ".join(map(repr, row)))
     path = Path(path)
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding=ENCODING)
     return path
 
 
 def read_tum(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     """``(timestamps (T,), poses (T, 3))`` of a TUM file: x, y and the yaw of each quaternion (z, roll and
-    pitch are dropped). Raises ``ValueError`` naming the file when a line does not hold 8 numbers."""
-    path = Path(path)
-    try:
-        rows = np.loadtxt(path, comments="#", ndmin=2)
-    except ValueError as error:
-        raise ValueError(f"{path}: not a TUM trajectory file ({error})") from None
+    pitch are dropped). Raises ``ValueError`` naming the file and line when a line does not hold 8 numbers."""
+    values = []
+    for record in read_records(path):
+        record.expect(8, "TUM (timestamp x y z qx qy qz qw)")
+        values.append(record.numbers(0, "value"))
+    rows = np.array(values, dtype=float).reshape(-1, 8)
     if rows.size == 0:
         return np.zeros(0), np.zeros((0, 3))
-    if rows.shape[1] != 8:
-        raise ValueError(f"{path}: a TUM trajectory has 8 numbers per line, found {rows.shape[1]}")
     qx, qy, qz, qw = rows[:, 4:].T
     yaw = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
     return rows[:, 0], np.column_stack([rows[:, 1], rows[:, 2], yaw])

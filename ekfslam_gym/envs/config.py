@@ -50,16 +50,20 @@ def _integer(name: str, value: Any, minimum: int) -> None:
 
 @dataclass(frozen=True)
 class WorldConfig:
-    """The layout generator (``arena``, ``rooms``, ``loop``, or ``surveyed`` with the landmark positions given),
-    the exact number of landmarks, and keyword arguments passed to the generator (sizes in m, e.g.
-    ``{"width": 20.0}``)."""
+    """The layout generator (a name of ``ekfslam_gym.sim.LAYOUTS``: a layout family such as ``arena``, ``rooms``,
+    ``loop`` or ``maze``, ``surveyed`` with the landmark positions given, or ``map_server`` for a ROS map), the
+    exact number of landmarks, and keyword arguments passed to the generator (sizes in m, e.g.
+    ``{"width": 20.0}``; each layout's keywords: ``ekfslam_gym.sim.layout_keywords``). A keyword the layout does
+    not take, or a value of the wrong kind, raises here, naming ``world.layout_kwargs.<key>``; the env's config
+    also draws the layout once (``check_world``), so a value the generator refuses raises when the config is
+    built, not at the first reset."""
 
     layout: str = "arena"
     n_landmarks: int = 30
     layout_kwargs: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        from ..sim.layouts import LAYOUTS
+        from ..sim.layouts import LAYOUTS, check_layout_kwargs
 
         _require(self.layout in LAYOUTS, "world.layout", f"must be one of {sorted(LAYOUTS)}", self.layout)
         _integer("world.n_landmarks", self.n_landmarks, 1)
@@ -69,7 +73,42 @@ class WorldConfig:
             "must be a mapping",
             self.layout_kwargs,
         )
-        object.__setattr__(self, "layout_kwargs", dict(self.layout_kwargs))
+        object.__setattr__(self, "layout_kwargs", check_layout_kwargs(self.layout, self.layout_kwargs))
+
+
+def check_world(world: WorldConfig, robot_radius: float) -> None:
+    """Draw ``world``'s layout once (seed 0, for a robot of ``robot_radius`` m, as the env's reset does), so that
+    a value its generator refuses (a size too small, a map file that is missing or malformed, more landmarks
+    than fit) raises ValueError when the config is built. Each distinct world is drawn once per process."""
+    key = (world.layout, world.n_landmarks, _frozen(world.layout_kwargs), float(robot_radius))
+    if key in _checked_worlds:
+        return
+    import numpy as np
+
+    from ..sim.layouts import make_layout
+
+    try:
+        kwargs = {"robot_radius": float(robot_radius), **world.layout_kwargs}
+        make_layout(world.layout, np.random.default_rng(0), world.n_landmarks, **kwargs)
+    except ValueError as error:
+        raise ValueError(f"world (layout {world.layout!r}): {error}") from None
+    if len(_checked_worlds) >= 256:
+        _checked_worlds.clear()
+    _checked_worlds.add(key)
+
+
+_checked_worlds: set[tuple] = set()
+
+
+def _frozen(value: Any) -> Any:
+    """A hashable copy of a layout_kwargs value (mappings, sequences and arrays nested in any way)."""
+    if isinstance(value, Mapping):
+        return tuple(sorted((str(k), _frozen(v)) for k, v in value.items()))
+    if isinstance(value, (list, tuple)):
+        return tuple(_frozen(v) for v in value)
+    if hasattr(value, "tobytes") and hasattr(value, "shape"):
+        return (str(value.dtype), value.shape, value.tobytes())
+    return value
 
 
 @dataclass(frozen=True)
@@ -277,6 +316,7 @@ class EnvConfig:
         _integer("loop_gap", self.loop_gap, 1)
         # The env's reward needs log det Sigma finite from the start: the course's zero pose prior is no option.
         _positive("filter.pose_prior", self.filter.pose_prior)
+        check_world(self.world, self.robot.radius)
 
     # ------------------------------------------------------------------ building
     @classmethod

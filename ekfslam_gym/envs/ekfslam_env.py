@@ -120,7 +120,9 @@ class EKFSLAMEnv(gym.Env):
     id's preset, and ``EKFSLAMEnv(preset="EKFSLAM-Large-v0")`` builds an id's configuration without
     ``gym.make``. ``overrides`` are sections applied on top, e.g. ``world={"n_landmarks": 50},
     reward={"collision": 2.0}, filter={"motion_model": "odometry"}`` (``ekfslam_gym.filter.FilterSettings``). A
-    bad value raises ``ValueError`` naming the field. ``render_mode``: ``rgb_array`` or ``human``.
+    bad value raises ``ValueError`` naming the field. ``render_mode``: ``rgb_array`` or ``human``;
+    ``render_options``: ``{"legend": False}`` drops the frame's legend, ``{"landmark_ellipse_scale": 5}`` draws
+    the landmark ellipses five times larger (``ekfslam_gym.envs.render.RenderOptions``).
 
     ## Registered Configurations
     - ``EKFSLAM-v0``: 20 x 20 m arena, 30 landmarks, 500 steps of 0.1 s.
@@ -136,6 +138,7 @@ class EKFSLAMEnv(gym.Env):
         render_mode: str | None = None,
         *,
         preset: str | None = None,
+        render_options: Mapping[str, Any] | None = None,
         **overrides: Any,
     ) -> None:
         config = build_config(config, preset, overrides)
@@ -186,6 +189,9 @@ class EKFSLAMEnv(gym.Env):
         self._t = 0
         self._steps = 0
         self._renderer = None
+        from .render import RenderOptions  # no pygame: the options are checked here, the picture drawn later
+
+        self.render_options = RenderOptions.build(dict(render_options) if render_options else None)
 
     def set_max_episode_steps(self, steps: int) -> None:
         """Make ``steps`` the episode's step limit: truncation and the observation's time left follow it.
@@ -588,7 +594,9 @@ class EKFSLAMEnv(gym.Env):
         from .render import Renderer, Scene
 
         if self._renderer is None:
-            self._renderer = Renderer(self.render_mode, fps=self.metadata["render_fps"])
+            self._renderer = Renderer(
+                self.render_mode, fps=self.metadata["render_fps"], options=self.render_options
+            )
         ekf, world, cfg = self._ekf, self._world, self.config
         observed = ekf.observed
         scene = Scene(
@@ -608,7 +616,10 @@ class EKFSLAMEnv(gym.Env):
             trail_est=np.array(self._trail_est).reshape(-1, 2),
             max_range=cfg.sensor.max_range,
             fov=cfg.sensor.fov,
-            text=f"t={self._t}  log det={self._telescoped.log_det:.1f}  seen={int(observed.sum())}/{ekf.n_landmarks}",
+            text=(  # in env steps, the unit of the step limit (a macro action is one step of several controls)
+                f"step {self._steps}/{self._max_steps}  log det {self._telescoped.log_det:.1f}  "
+                f"landmarks seen {int(observed.sum())}/{ekf.n_landmarks}"
+            ),
         )
         return self._renderer.render(scene)
 

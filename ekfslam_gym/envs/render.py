@@ -2,8 +2,11 @@
 
 Walls as capsules, true landmarks as black crosses, estimates of seen landmarks with their 3-sigma ellipses in
 blue, the true robot in grey and black, the estimated robot with its 3-sigma position ellipse in red, the
-step's readings as thin lines from the estimated robot, the sensor's field of view shaded faintly, and trails
-of both trajectories. A :class:`Scene` is everything that is drawn; the renderer reads it and decides nothing.
+step's readings as thin lines from the estimated robot, the region the sensor sees from the true pose shaded
+faintly (its field of view cut by the walls and the world's edge, ``visibility.visibility_polygon``), trails of
+both trajectories, and a legend that says which is which. A :class:`Scene` is everything that is drawn; the
+renderer reads it and decides nothing. :class:`RenderOptions` are the reader's choices: the legend, and a
+magnification of the landmark ellipses for large worlds, where 3 sigma is a few pixels.
 
 pygame-ce is in the optional ``render`` extra, so it is imported only when a :class:`Renderer` is built.
 ``rgb_array`` draws on a plain ``pygame.Surface`` and never touches ``pygame.display``, so it runs headless.
@@ -19,9 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from ..ellipses import ellipse_points
+from ..ellipses import SIGMAS, ellipse_points
+from .visibility import visibility_polygon
 
-__all__ = ["RENDER_MODES", "Scene", "Renderer", "ellipse_points"]
+__all__ = ["RENDER_MODES", "RenderOptions", "Scene", "Renderer", "ellipse_points"]
 
 RENDER_MODES = ("rgb_array", "human")
 # SDL's video drivers that draw nowhere: chosen by SDL_VIDEODRIVER, or SDL's fallback without a window system.
@@ -30,6 +34,9 @@ ELLIPSE_POINTS = 24
 ARC_POINTS = 32  # points on the field-of-view arc
 PAD = 8  # [px] around the world
 TEXT_BAND = 20  # [px] at the top, kept whether or not there is text so the map never shifts
+LEGEND_ROW = 18  # [px] per row of the legend band at the bottom
+LEGEND_MARK = 21  # [px] from an entry's left edge to its label
+LEGEND_GAP = 12  # [px] between a label and the next column
 PX_LIMIT = 1.0e5  # [px] coordinates are clamped here so absurd estimates cannot overflow pygame's ints
 
 BACKGROUND = (255, 255, 255)
@@ -45,6 +52,37 @@ EST_TRAIL = (235, 140, 140)
 LANDMARK_EST = (30, 80, 220)
 READING = (90, 90, 90)
 TEXT = (20, 20, 20)
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """How a frame is drawn, not what: ``legend`` adds a band naming every mark; ``landmark_ellipse_scale``
+    draws the landmark ellipses that many times larger (3 sigma x scale, said in the legend) so that they can
+    be seen in a large world. Give them to ``gym.make(..., render_options={"legend": False})``."""
+
+    legend: bool = True
+    landmark_ellipse_scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.legend, bool):
+            raise ValueError(f"RenderOptions.legend must be true or false, got {self.legend!r}")
+        scale = self.landmark_ellipse_scale
+        if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not (1.0 <= scale < math.inf):
+            raise ValueError(f"RenderOptions.landmark_ellipse_scale must be a number >= 1, got {scale!r}")
+
+    @classmethod
+    def build(cls, options: RenderOptions | dict[str, Any] | None) -> RenderOptions:
+        """``options`` as given to the env: None (the defaults), a mapping of the fields, or the options."""
+        if options is None:
+            return cls()
+        if isinstance(options, cls):
+            return options
+        if not isinstance(options, dict):
+            raise ValueError(f"render_options must be a mapping or RenderOptions, got {options!r}")
+        unknown = sorted(set(options) - {"legend", "landmark_ellipse_scale"})
+        if unknown:
+            raise ValueError(f"render_options has no field {unknown}; valid: legend, landmark_ellipse_scale")
+        return cls(**options)
 
 
 @dataclass(frozen=True)
@@ -67,13 +105,20 @@ class Scene:
     trail_est: np.ndarray  # (T, 2)
     max_range: float
     fov: float  # rad, full field of view
-    text: str = ""
+    text: str = ""  # the header line; the env writes its own step count (env steps), log det and landmarks
 
 
 class Renderer:
     """Draws :class:`Scene` frames for ``render_mode`` ``"rgb_array"`` (returns an image) or ``"human"``."""
 
-    def __init__(self, render_mode: str, width: int = 640, height: int = 640, fps: int = 10) -> None:
+    def __init__(
+        self,
+        render_mode: str,
+        width: int = 640,
+        height: int = 640,
+        fps: int = 10,
+        options: RenderOptions | dict[str, Any] | None = None,
+    ) -> None:
         if render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be one of {list(RENDER_MODES)}, got {render_mode!r}")
         if width < 2 * PAD + 1 or height < 2 * PAD + TEXT_BAND + 1:
@@ -84,6 +129,7 @@ class Renderer:
         except ImportError as error:  # the render extra is optional
             raise ImportError('rendering needs pygame-ce: pip install "ekfslam-gym[render]"') from error
         self._pg: Any = pygame
+        self.options = RenderOptions.build(options)
         self.render_mode = render_mode
         self.width = int(width)
         self.height = int(height)
@@ -91,9 +137,18 @@ class Renderer:
         self._surface = pygame.Surface((self.width, self.height))
         self._font: Any = None
         self._font_tried = False
+        self._small_font: Any = None
+        self._small_font_tried = False
         self._window: Any = None
         self._clock: Any = None
         self._scale, self._ox, self._oy = 1.0, 0.0, 0.0  # set from the scene's bounds on every frame
+        self._legend_columns: list[int] = []  # the x of each column, set with the legend's layout
+        self._legend_band = self._legend_layout() * LEGEND_ROW + 4 if self.options.legend else 0
+        if self.height - 2 * PAD - TEXT_BAND - self._legend_band < 1:
+            raise ValueError(
+                f"height {height} leaves no room for the map under the legend; make the frame taller or pass "
+                "render_options={'legend': False}"
+            )
 
     # -- geometry ------------------------------------------------------------------------------------------
 
@@ -103,10 +158,10 @@ class Renderer:
         if b.shape != (4,) or not np.isfinite(b).all() or b[2] <= b[0] or b[3] <= b[1]:
             raise ValueError(f"bounds must be finite (xmin, ymin, xmax, ymax) with max > min, got {bounds!r}")
         avail_w = self.width - 2 * PAD
-        avail_h = self.height - 2 * PAD - TEXT_BAND
+        avail_h = self.height - 2 * PAD - TEXT_BAND - self._legend_band
         scale = min(avail_w / (b[2] - b[0]), avail_h / (b[3] - b[1]))
         left = PAD + 0.5 * (avail_w - scale * (b[2] - b[0]))
-        bottom = self.height - PAD - 0.5 * (avail_h - scale * (b[3] - b[1]))
+        bottom = self.height - PAD - self._legend_band - 0.5 * (avail_h - scale * (b[3] - b[1]))
         return float(scale), float(left - scale * b[0]), float(bottom + scale * b[1])
 
     def _px(self, xy: np.ndarray) -> np.ndarray:
@@ -149,9 +204,13 @@ class Renderer:
         est_ok = pose_est.shape == (3,) and bool(np.isfinite(pose_est).all())
         true_ok = pose_true.shape == (3,) and bool(np.isfinite(pose_true).all())
 
-        if est_ok:
-            self._draw_fov(pose_est, float(scene.max_range), float(scene.fov))
-        self._draw_walls(np.asarray(scene.walls, dtype=float).reshape(-1, 4), float(scene.wall_radius))
+        walls = np.asarray(scene.walls, dtype=float).reshape(-1, 4)
+        walls = walls[np.isfinite(walls).all(axis=1)]
+        if true_ok:
+            self._draw_fov(
+                pose_true, walls, float(scene.wall_radius), float(scene.max_range), float(scene.fov), b
+            )
+        self._draw_walls(walls, float(scene.wall_radius))
         self._draw_trail(scene.trail_true, TRUE_TRAIL)
         self._draw_trail(scene.trail_est, EST_TRAIL)
 
@@ -162,47 +221,45 @@ class Renderer:
         self._draw_landmarks_true(np.asarray(scene.landmarks_true, dtype=float).reshape(-1, 2))
         self._draw_landmarks_est(landmarks_est, np.asarray(scene.landmark_covs, dtype=float), seen)
 
-        radius = max(2.0, self._scale * float(scene.robot_radius))
+        radius = max(5.0, self._scale * float(scene.robot_radius))  # [px] seen even in a large world
         if true_ok:
             centre = self._px(pose_true[:2])
             pg.draw.circle(surf, TRUE_BODY, centre, radius)
             pg.draw.circle(surf, TRUE, centre, radius, width=1)
             self._heading(pose_true, radius, TRUE)
         if est_ok:
-            pose_cov = np.asarray(scene.pose_cov, dtype=float)
-            if pose_cov.shape == (3, 3):
-                points, valid = ellipse_points(pose_est[:2], pose_cov[:2, :2])
-                if valid[0]:
-                    pg.draw.aalines(surf, EST, True, self._px(points[0]).tolist())
             centre = self._px(pose_est[:2])
             pg.draw.circle(surf, EST, centre, radius, width=2)
             self._heading(pose_est, radius, EST)
+            pose_cov = np.asarray(scene.pose_cov, dtype=float)
+            if pose_cov.shape == (3, 3):  # on top of both robots, two pixels wide: it is the picture's point
+                points, valid = ellipse_points(pose_est[:2], pose_cov[:2, :2])
+                if valid[0]:
+                    pg.draw.lines(surf, EST, True, self._px(points[0]).tolist(), 2)
 
         if scene.text:
             self._draw_text(str(scene.text))
+        if self.options.legend:
+            self._draw_legend()
 
-    def _draw_fov(self, pose: np.ndarray, max_range: float, fov: float) -> None:
-        """The sensor's wedge around the estimated heading: where the robot believes it can see.
-
-        The radius is capped just past the canvas's farthest corner: the picture is the same, and pygame's
-        fills take seconds on coordinates in the millions.
-        """
-        if not (max_range > 0 and math.isfinite(fov) and fov > 0):  # also rejects NaN
-            return
-        pg = self._pg
-        centre = self._px(pose[:2])
-        corners = np.array([[0.0, 0.0], [self.width, 0.0], [0.0, self.height], [self.width, self.height]])
-        r_visible = 1.1 * float(np.hypot(*(corners - centre).T).max()) + 8.0
-        r_px = min(self._scale * max_range, r_visible)
-        if fov >= 2.0 * math.pi - 1e-9:
-            pg.draw.circle(self._surface, FOV_FILL, centre, r_px)
-            pg.draw.circle(self._surface, FOV_EDGE, centre, r_px, width=1)
-            return
-        angles = pose[2] + np.linspace(-0.5 * fov, 0.5 * fov, ARC_POINTS)
-        arc = centre + r_px * np.stack([np.cos(angles), -np.sin(angles)], axis=1)  # rows grow downwards
-        points = np.vstack([centre[None], arc]).tolist()
-        pg.draw.polygon(self._surface, FOV_FILL, points)
-        pg.draw.lines(self._surface, FOV_EDGE, True, points)
+    def _draw_fov(
+        self,
+        pose: np.ndarray,
+        walls: np.ndarray,
+        wall_radius: float,
+        max_range: float,
+        fov: float,
+        bounds: np.ndarray,
+    ) -> None:
+        """The region the sensor sees from the true pose: its field of view, cut by the walls (the sensor's
+        own line-of-sight test) and by the world's edge."""
+        if not (max_range > 0 and math.isfinite(max_range) and math.isfinite(fov) and fov > 0):
+            return  # also rejects NaN; an infinite range is cut by the world's edge below
+        reach = min(max_range, float(np.hypot(bounds[2] - bounds[0], bounds[3] - bounds[1])))
+        polygon = visibility_polygon(pose, walls, wall_radius, reach, min(fov, 2 * math.pi), bounds)
+        points = self._px(polygon).tolist()
+        self._pg.draw.polygon(self._surface, FOV_FILL, points)
+        self._pg.draw.lines(self._surface, FOV_EDGE, True, points)
 
     def _draw_walls(self, walls: np.ndarray, wall_radius: float) -> None:
         """Capsules: a quad per segment plus round caps, so corners meet like the collision shapes."""
@@ -268,7 +325,7 @@ class Renderer:
         if not mask.any():
             return
         centres = landmarks[:n][mask]
-        points, valid = ellipse_points(centres, covs[:n][mask])
+        points, valid = ellipse_points(centres, covs[:n][mask], SIGMAS * self.options.landmark_ellipse_scale)
         pg = self._pg
         surf = self._surface
         for poly in self._px(points[valid]).tolist():
@@ -293,6 +350,78 @@ class Renderer:
                 self._font = None
         if self._font is not None:
             self._surface.blit(self._font.render(text, True, TEXT), (PAD, 3))
+
+    def _legend_entries(self) -> list[tuple[str, str, tuple[int, int, int]]]:
+        """(mark, label, colour) for every kind of mark the frame draws."""
+        scale = self.options.landmark_ellipse_scale
+        sigma = f"{SIGMAS:g}\u03c3" + (f" \u00d7{scale:g}" if scale != 1.0 else "")
+        return [
+            ("disc", "true robot", TRUE_BODY),
+            ("ring", f"estimated robot, {SIGMAS:g}\u03c3", EST),
+            ("cross", "true landmark", TRUE),
+            ("dot", f"landmark estimate, {sigma}", LANDMARK_EST),
+            ("line", "true path", TRUE_TRAIL),
+            ("line", "estimated path", EST_TRAIL),
+            ("line", "reading this step", READING),
+            ("area", "what the sensor sees", FOV_EDGE),
+        ]
+
+    def _legend_layout(self) -> int:
+        """Lay the entries out in as many columns as fit the frame, each as wide as its longest label; the
+        number of rows."""
+        entries = self._legend_entries()
+        font = self._legend_font()
+        widths = [font.size(label)[0] if font is not None else 8 * len(label) for _, label, _ in entries]
+        for columns in range(len(entries), 0, -1):
+            column_widths = [
+                max(widths[i] for i in range(c, len(entries), columns)) + LEGEND_MARK + LEGEND_GAP
+                for c in range(columns)
+            ]
+            if sum(column_widths) - LEGEND_GAP <= self.width - 2 * PAD or columns == 1:
+                self._legend_columns = [PAD + sum(column_widths[:c]) for c in range(columns)]
+                return -(-len(entries) // columns)
+        return len(entries)  # unreachable: one column always fits the loop's last test
+
+    def _draw_legend(self) -> None:
+        """The legend band under the map: a sample of each mark and what it is."""
+        pg = self._pg
+        surf = self._surface
+        font = self._legend_font()
+        columns = self._legend_columns
+        top = self.height - self._legend_band + 2
+        pg.draw.line(surf, BOUNDS, (PAD, top - 2), (self.width - PAD, top - 2))
+        for i, (mark, label, colour) in enumerate(self._legend_entries()):
+            x = columns[i % len(columns)]
+            y = top + (i // len(columns)) * LEGEND_ROW + LEGEND_ROW // 2
+            if mark == "disc":
+                pg.draw.circle(surf, TRUE_BODY, (x + 8, y), 6)
+                pg.draw.circle(surf, TRUE, (x + 8, y), 6, width=1)
+            elif mark == "ring":
+                pg.draw.circle(surf, EST, (x + 8, y), 6, width=2)
+            elif mark == "cross":
+                pg.draw.line(surf, TRUE, (x + 4, y - 4), (x + 12, y + 4), 2)
+                pg.draw.line(surf, TRUE, (x + 4, y + 4), (x + 12, y - 4), 2)
+            elif mark == "dot":
+                pg.draw.circle(surf, colour, (x + 8, y), 3)
+                pg.draw.ellipse(surf, colour, pg.Rect(x, y - 5, 16, 10), width=1)
+            elif mark == "area":
+                pg.draw.rect(surf, FOV_FILL, pg.Rect(x, y - 5, 16, 10))
+                pg.draw.rect(surf, colour, pg.Rect(x, y - 5, 16, 10), width=1)
+            else:
+                pg.draw.line(surf, colour, (x, y), (x + 16, y), 2)
+            if font is not None:
+                text = font.render(label, True, TEXT)
+                surf.blit(text, (x + LEGEND_MARK, y - text.get_height() // 2))
+
+    def _legend_font(self) -> Any:
+        if not self._small_font_tried:
+            self._small_font_tried = True
+            try:
+                self._pg.font.init()
+                self._small_font = self._pg.font.Font(None, 18)
+            except Exception:  # a missing font must not break rendering: the marks are still drawn
+                self._small_font = None
+        return self._small_font
 
     # -- window --------------------------------------------------------------------------------------------
 

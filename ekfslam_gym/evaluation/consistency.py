@@ -16,7 +16,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 QUANTITIES = ("pose_nees", "map_nees", "nis")
 
@@ -38,6 +37,8 @@ class ConsistencyRun:
 
     def bands(self, quantity: str, confidence: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
         """Per-step chi-squared bounds of ``normalised(quantity)``."""
+        from scipy import stats  # here, not at import: scipy.stats costs a second at start-up
+
         dof = np.maximum(self.dofs[quantity], 1)
         alpha = 1.0 - confidence
         lo = stats.chi2.ppf(0.5 * alpha, dof) / dof

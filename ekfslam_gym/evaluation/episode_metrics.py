@@ -65,7 +65,9 @@ ASSOCIATION_KEYS: tuple[str, ...] = ("false_associations", "missed_associations"
 """With unknown data association: the env's counts over the episode (``EKFSLAMEnv``'s docstring)."""
 
 POSE_DIM = 3
-NEES_STEP_BOUNDS = metrics.nees_bounds(POSE_DIM, 1)
+# metrics.nees_bounds(POSE_DIM, 1), chi2.ppf([0.025, 0.975], 3), written out so that importing the metrics does
+# not import scipy.stats (a second of every command's start-up); tests/test_metrics.py holds them equal.
+NEES_STEP_BOUNDS = (0.21579528262389797, 9.348403604496148)
 
 
 def _slogdet(matrix: np.ndarray) -> float:

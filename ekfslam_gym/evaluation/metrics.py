@@ -20,7 +20,6 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-from scipy import stats
 
 from ..angles import wrap_angles
 
@@ -113,6 +112,8 @@ def nees_bounds(dim: int = 3, n_runs: int = 1, confidence: float = 0.95) -> tupl
 
     ``n_runs = 1`` gives the per-step bounds of a single run, (0.216, 9.35) for dim 3 at 95 %.
     """
+    from scipy import stats  # here, not at import: scipy.stats costs a second at start-up
+
     if dim < 1 or n_runs < 1 or not 0.0 < confidence < 1.0:
         raise ValueError(
             f"need dim >= 1, n_runs >= 1 and 0 < confidence < 1, got {dim}, {n_runs}, {confidence}"
@@ -145,6 +146,8 @@ def gain_correlation(belief: np.ndarray, truth: np.ndarray) -> tuple[float, floa
     correlate). Spearman is Pearson on the ranks (ties averaged), so it is not ruled by a few large steps
     (the first corrections of newly seen landmarks).
     """
+    from scipy import stats  # here, not at import: scipy.stats costs a second at start-up
+
     belief = np.asarray(belief, dtype=float).reshape(-1)
     truth = np.asarray(truth, dtype=float).reshape(-1)
     if belief.shape != truth.shape:
@@ -166,6 +169,8 @@ def _pearson(x: np.ndarray, y: np.ndarray) -> float:
 
 
 def _iqm_along_last_axis(values: np.ndarray) -> np.ndarray:
+    from scipy import stats  # here, not at import: scipy.stats costs a second at start-up
+
     return stats.trim_mean(values, 0.25, axis=-1)
 
 

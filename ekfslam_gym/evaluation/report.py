@@ -132,13 +132,16 @@ def text_summary(s: Mapping[str, Any]) -> str:
     if len(summaries) != 1:
         raise TypeError(f"expected one summary(name, episodes), got {len(summaries)}: {list(summaries)}")
     (s,) = summaries.values()
+    width = (
+        max([len("metric"), *map(len, s["metrics"])]) + 2
+    )  # the longest name sets the column, none overflows
     lines = [
         f"{s['agent']}: {s['episodes']} episodes",
-        f"  {'metric':<18}{'IQM':>10}  {'95% CI':<22}{'mean':>10}",
+        f"  {'metric':<{width}}{'IQM':>10}  {'95% CI':<22}{'mean':>10}",
     ]
     for k, m in s["metrics"].items():
         ci = f"[{format_value(m['ci'][0])}, {format_value(m['ci'][1])}]"
-        lines.append(f"  {k:<18}{format_value(m['iqm']):>10}  {ci:<22}{format_value(m['mean']):>10}")
+        lines.append(f"  {k:<{width}}{format_value(m['iqm']):>10}  {ci:<22}{format_value(m['mean']):>10}")
     return "\n".join(lines)
 
 

@@ -7,7 +7,7 @@ defined here once; the env's ``filter`` section (``ekfslam_gym.envs.config.Filte
 command lines and the benchmarks read them from here. The defaults are the env's (the wheels model, inverse
 initialisation, a 100 m^2 landmark prior, ``KNOWN_START_POSE_PRIOR``); ``COURSE_SETTINGS`` holds the course's
 (the odometry model, course initialisation, a 1000 m^2 landmark prior, a zero pose prior), which its replay
-(``ekfslam_gym.evaluation.replay``) uses.
+(``ekfslam_gym.replay.course``) uses.
 
 Loads neither numba nor the kernels: registering the env ids and validating a config stay cheap.
 """

@@ -1,7 +1,7 @@
 """Graph-based least-squares SLAM: SE(2) algebra, factors, the sparse linear system, sparse solvers, the
 Gauss-Newton / Levenberg-Marquardt optimiser, and the smoother that turns a recorded drive into a graph.
 
-``python -m ekfslam_gym.graph FILE`` optimises a ``.dat``/``.g2o`` graph or a GTSAM 2-D dataset (``.txt``/``.graph``)
+``ekfslam-graph FILE`` optimises a ``.dat``/``.g2o`` graph or a GTSAM 2-D dataset (``.txt``/``.graph``)
 (see ``ekfslam_gym.cli.graph``).
 """
 

@@ -3,7 +3,8 @@
 It knows nothing of the filter; the env composes the two. Units are metres, seconds and radians.
 """
 
-from .layouts import LAYOUTS, Layout, make_layout, place_landmarks
+from .families import FAMILIES, TIERS, world_section
+from .layouts import LAYOUTS, Layout, check_layout_kwargs, layout_keywords, make_layout, place_landmarks
 from .odometry import (
     OdometryNoise,
     OdometryReading,
@@ -18,6 +19,7 @@ from .sensor import RangeBearingSensor, Readings, SensorParams
 from .world import World
 
 __all__ = [
+    "FAMILIES",
     "LAYOUTS",
     "Layout",
     "OdometryNoise",
@@ -26,17 +28,21 @@ __all__ = [
     "Readings",
     "RobotParams",
     "SensorParams",
+    "TIERS",
     "VelocityNoise",
     "VelocityReading",
     "WheelOdometryNoise",
     "WheelOdometryReading",
     "World",
+    "check_layout_kwargs",
     "compose_odometry",
     "decompose_odometry",
     "decompose_wheels",
+    "layout_keywords",
     "make_layout",
     "place_landmarks",
     "velocity_from_motion",
+    "world_section",
 ]
 
 

@@ -280,3 +280,31 @@ def connected_component(free: BoolArray2, row: int, col: int) -> BoolArray2:
                 stack[top, 1] = nc
                 top += 1
     return component
+
+
+@njit(cache=True)
+def free_cells(
+    walls: F8Array2, x0: float, y0: float, cell: float, rows: int, cols: int, clearance: float
+) -> BoolArray2:
+    """The grid (rows, cols) of cells whose centres (x0 + (col + 0.5) cell, y0 + (row + 0.5) cell) lie at least
+    ``clearance`` m from every wall centre line: ``min_wall_distance(centres, walls) >= clearance``, cell for
+    cell, but visiting only the cells near each wall (a layout's free-space grid in ~0.1 ms, not ~50 ms)."""
+    free = np.ones((rows, cols), dtype=np.bool_)
+    for j in range(walls.shape[0]):
+        ax = walls[j, 0]
+        ay = walls[j, 1]
+        bx = walls[j, 2]
+        by = walls[j, 3]
+        # every centre within ``clearance`` of the segment lies in its bounding box grown by ``clearance``
+        c0 = max(0, int(math.floor((min(ax, bx) - clearance - x0) / cell - 0.5)) - 1)
+        c1 = min(cols - 1, int(math.ceil((max(ax, bx) + clearance - x0) / cell - 0.5)) + 1)
+        r0 = max(0, int(math.floor((min(ay, by) - clearance - y0) / cell - 0.5)) - 1)
+        r1 = min(rows - 1, int(math.ceil((max(ay, by) + clearance - y0) / cell - 0.5)) + 1)
+        for r in range(r0, r1 + 1):
+            py = y0 + (r + 0.5) * cell
+            for c in range(c0, c1 + 1):
+                if free[r, c]:
+                    px = x0 + (c + 0.5) * cell
+                    if math.sqrt(_point_segment_dist2(px, py, ax, ay, bx, by)) < clearance:
+                        free[r, c] = False
+    return free

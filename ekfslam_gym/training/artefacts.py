@@ -1,6 +1,7 @@
-"""What a training run leaves in its folder, and how it is read back: models saved with their normalisation
-statistics and the run's record, checkpoints with the random state, the record itself (``config.yaml``,
-``versions.json``), the demonstrations a run cloned, and the learning curve from SB3's monitor logs.
+"""What a training run leaves in its folder: models saved with their normalisation statistics and the run's
+record, checkpoints with the random state, the record itself (``config.yaml``, ``versions.json``), the
+demonstrations a run cloned, and the learning curve from SB3's monitor logs. The file names, and the parser of
+the record that every reader shares, are ``ekfslam_gym.artefacts``'.
 
 The folder's files (``ekfslam_gym.training.run`` writes them):
 
@@ -21,20 +22,27 @@ import json
 import pickle
 import platform
 import random
-import re
 import sys
 from collections.abc import Mapping
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-import yaml
+from ekfslam_gym.artefacts import (  # noqa: F401  (read_run: the command line reads it here)
+    DAGGER_FILE,
+    DEMONSTRATIONS_FILE,
+    EVALUATIONS_FILE,
+    LEARNING_CURVE_FILE,
+    MONITOR,
+    RECORD_FILE,
+    VERSIONS_FILE,
+    ModelFiles,
+    RunRecord,
+    checkpoint_files,
+    read_run,
+)
 
 from .demonstrations import Demonstrations, load
-
-DEMONSTRATIONS_FILE = "demonstrations.npz"
-DAGGER_FILE = "dagger.npz"  # the demonstrations and every DAgger round's pairs, when there were rounds
-BC_MODEL = "bc_model"  # the cloned policy, before any PPO update, saved with its statistics in the run folder
 
 
 def versions() -> dict[str, str]:
@@ -63,54 +71,34 @@ def write_record(
     """Create the run folder with its record: ``config.yaml`` (env id, seed, the resolved entry and the command
     line that repeats the run) and ``versions.json``."""
     out.mkdir(parents=True, exist_ok=True)
-    record = {"env_id": env_id, "seed": seed, "entry": dict(entry), "argv": list(command or [])}
-    (out / "config.yaml").write_text(yaml.safe_dump(record, sort_keys=False))
-    (out / "versions.json").write_text(json.dumps(versions(), indent=2))
+    (out / RECORD_FILE).write_text(RunRecord(env_id, seed, dict(entry)).to_yaml(command))
+    (out / VERSIONS_FILE).write_text(json.dumps(versions(), indent=2))
 
 
 def save_with_stats(model, stem: Path, run: Path) -> None:
     """``stem.zip``, ``stem_vecnormalize.pkl`` if the model normalises (the convention the agents load), and the
-    run's config and package versions beside it as ``stem_config.yaml`` and ``stem_versions.json``."""
-    stem.parent.mkdir(parents=True, exist_ok=True)
-    model.save(str(stem) + ".zip")
+    run's record and package versions beside it as ``stem_config.yaml`` and ``stem_versions.json``."""
+    files = ModelFiles(Path(stem))
+    files.stem.parent.mkdir(parents=True, exist_ok=True)
+    model.save(str(files.zip))
     normalizer = model.get_vec_normalize_env()
     if normalizer is not None:
-        normalizer.save(str(stem) + "_vecnormalize.pkl")
-    for name, suffix in (("config.yaml", "_config.yaml"), ("versions.json", "_versions.json")):
-        (Path(str(stem) + suffix)).write_text((run / name).read_text())
+        normalizer.save(str(files.vecnormalize))
+    files.record.write_text((run / RECORD_FILE).read_text())
+    files.versions.write_text((run / VERSIONS_FILE).read_text())
 
 
 def save_checkpoint(model, run: Path, steps: int) -> None:
+    """The model at ``steps`` env steps in ``checkpoints/``, with the random state to resume from."""
     import numpy as np
     import torch
 
-    stem = run / "checkpoints" / f"ppo_{steps}_steps"
-    save_with_stats(model, stem, run)
+    files = checkpoint_files(run, steps)
+    save_with_stats(model, files.stem, run)
     # SB3 draws from the legacy global numpy RNG, so that is the state to keep.
     state = {"python": random.getstate(), "numpy": np.random.get_state(), "torch": torch.get_rng_state()}  # noqa: NPY002
-    with open(str(stem) + "_rng.pkl", "wb") as handle:
+    with open(files.rng, "wb") as handle:
         pickle.dump(state, handle)
-
-
-def latest_checkpoint(folder: Path) -> tuple[Path, int] | None:
-    found = []
-    for path in folder.glob("ppo_*_steps.zip"):
-        match = re.fullmatch(r"ppo_(\d+)_steps\.zip", path.name)
-        if match:
-            found.append((int(match.group(1)), path))
-    if not found:
-        return None
-    steps, path = max(found)
-    return path, steps
-
-
-def read_run(folder: Path) -> tuple[str, int, dict[str, Any]]:
-    """(env id, seed, entry) recorded in a run folder's ``config.yaml``, what ``--resume`` continues."""
-    path = Path(folder) / "config.yaml"
-    if not path.is_file():
-        raise FileNotFoundError(f"{folder} is not a training run folder (no config.yaml)")
-    saved = yaml.safe_load(path.read_text())
-    return saved["env_id"], int(saved["seed"]), dict(saved["entry"])
 
 
 def run_demonstrations(out: Path, pretrain: Mapping[str, Any]) -> Demonstrations:
@@ -130,7 +118,7 @@ def read_monitor(folder: Path):
     import numpy as np
 
     rows = []
-    for path in sorted(folder.rglob("*.monitor.csv")):
+    for path in sorted(Path(folder).rglob("*.monitor.csv")):
         lines = (
             path.read_text().splitlines()
         )  # '#{json header with t_start}', 'r,l,t', then one row an episode
@@ -156,14 +144,14 @@ def plot_learning_curve(out: Path) -> Path | None:
     fig = Figure(figsize=(7, 4))
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
-    episodes = read_monitor(out / "monitor")
+    episodes = read_monitor(out / MONITOR)
     if len(episodes):
         order = np.argsort(episodes[:, 2])
         returns, steps = episodes[order, 0], np.cumsum(episodes[order, 1])
         window = max(1, len(returns) // 20)
         smooth = np.convolve(returns, np.ones(window) / window, mode="valid")
         ax.plot(steps[window - 1 :], smooth, label=f"training (mean of {window} episodes)")
-    evaluations = out / "evaluations.npz"
+    evaluations = out / EVALUATIONS_FILE
     if evaluations.is_file():
         data = np.load(evaluations)
         ax.errorbar(data["timesteps"], data["results"].mean(axis=1), yerr=data["results"].std(axis=1),
@@ -175,6 +163,6 @@ def plot_learning_curve(out: Path) -> Path | None:
         ax.legend()
     else:
         ax.text(0.5, 0.5, "no finished episode yet", transform=ax.transAxes, ha="center")
-    path = out / "learning_curve.png"
+    path = out / LEARNING_CURVE_FILE
     fig.savefig(path, dpi=100, bbox_inches="tight")
     return path

@@ -1,7 +1,7 @@
 """Behaviour cloning of planner demonstrations into an SB3 PPO or sb3-contrib RecurrentPPO policy: the warm start of
 planner-guided training.
 
-Imitation first, then RL (issue 8): the policy is trained to choose the planner's action (the negative
+Imitation first, then RL: the policy is trained to choose the planner's action (the negative
 log-likelihood ``evaluate_actions`` gives under the policy's own distribution: cross-entropy on a primitives
 env's Discrete action, the diagonal Gaussian's on a waypoint env's Box goal; in shuffled minibatches over a few
 epochs; a recurrent policy reads whole episodes, so that its LSTM can learn what the planner remembers and the

@@ -21,8 +21,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from ekfslam_gym.agents.base import ActionKind
 from ekfslam_gym.agents.planners import make_planner
-from ekfslam_gym.envs.rewards import REWARD_NAMES
+from ekfslam_gym.envs.config import RewardConfig
+from ekfslam_gym.envs.rewards import REWARD_NAMES, nonzero_weights, weigh
 from ekfslam_gym.seeds import SELECTION_SEEDS, check_demonstration_seeds
 
 
@@ -85,8 +87,9 @@ def collect(
     actions, rewards, episodes = [], [], []
     weights = asdict(env.unwrapped.config.reward)  # every term's weight, defaults included
     terms: dict[str, list[float]] = {name: [] for name in REWARD_NAMES}
+    kind = ActionKind.of_env(env)
     try:
-        agent = make_planner(planner, env.unwrapped.config.action.kind, **dict(planner_kwargs or {}))
+        agent = make_planner(planner, kind, **dict(planner_kwargs or {}))
         for k, seed in enumerate(seeds):
             observation, _ = env.reset(seed=seed)
             agent.reset(env, seed=seed)
@@ -94,10 +97,8 @@ def collect(
                 driver.reset(env, seed=seed)
             while True:
                 label = agent.act(observation)
-                action = label if driver is None else driver.act(observation)
-                if np.ndim(action) == 0:  # a primitive's index
-                    action = np.int64(action)
-                    agent.executed(int(action))
+                action = label if driver is None else kind.action(driver.act(observation))
+                agent.executed(action)
                 observations.append(observation)
                 actions.append(label)
                 episodes.append(k)
@@ -117,8 +118,7 @@ def collect(
             "planner_kwargs": dict(planner_kwargs or {}),
             "driver": None if driver is None else getattr(driver, "name", type(driver).__name__),
             "reward_weights": weights, "reward_terms": "unweighted"}  # fmt: skip
-    labels = np.asarray(actions)
-    labels = labels.astype(np.int64 if labels.dtype.kind in "iu" else np.float32)
+    labels = np.asarray(actions, dtype=np.int64 if kind is ActionKind.PRIMITIVES else np.float32)
     return Demonstrations(stacked, labels, np.array(rewards, dtype=np.float64),
                           np.array(episodes, dtype=np.int64), np.array(seeds, dtype=np.int64), meta,
                           {name: np.array(values, dtype=np.float64) for name, values in terms.items()})  # fmt: skip
@@ -138,8 +138,9 @@ def env_reward_weights(env_id: str, env_kwargs: Mapping[str, Any] | None = None)
 
 def reweighted(demos: Demonstrations, weights: Mapping[str, float]) -> Demonstrations:
     """``demos`` with the rewards the env would have given under ``weights`` (every term's weight by name, as
-    ``env_reward_weights``): the sum of each recorded, unweighted term times its new weight. Exact up to rounding
-    because a weight only multiplies its term and never changes the trajectory. ValueError when the new reward
+    ``env_reward_weights``): the sum of each recorded, unweighted term times its new weight, taken by the env's own
+    ``rewards.weigh``. Exact up to rounding because a weight only multiplies its term and never changes the
+    trajectory. ValueError when the new reward
     needs a term the demonstrations did not record (a file of the older, weighted kind whose weight for it was
     0, or one that predates the terms)."""
     recorded = {name: float(w) for name, w in demos.meta.get("reward_weights", {}).items()}
@@ -160,10 +161,8 @@ def reweighted(demos: Demonstrations, weights: Mapping[str, float]) -> Demonstra
             f"the demonstrations did not record the reward terms {missing} that this run's reward weighs "
             "(their weight was 0 when these older demonstrations were collected); collect them again"
         )
-    rewards = np.zeros(len(demos.actions))
-    for name, w in weights.items():
-        if w:
-            rewards = rewards + w * terms[name]
+    # the env's own sum (``rewards.weigh``), taken over the recorded steps at once
+    rewards = np.zeros(len(demos.actions)) + weigh(terms, nonzero_weights(RewardConfig(**weights)))
     meta = {**demos.meta, "reward_weights": weights, "reward_terms": "unweighted"}
     return Demonstrations(
         demos.observations, demos.actions, rewards, demos.episodes, demos.seeds, meta, terms

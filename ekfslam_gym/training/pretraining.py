@@ -18,11 +18,12 @@ from typing import Any
 import numpy as np
 
 from ekfslam_gym.agents.ppo import PPOAgent
+from ekfslam_gym.artefacts import BC_MODEL, DAGGER_FILE, DEMONSTRATIONS_FILE, PRETRAIN_FILE
 
-from .artefacts import BC_MODEL, DAGGER_FILE, DEMONSTRATIONS_FILE, save_with_stats
+from .artefacts import save_with_stats
 from .cloning import CloneReport, behaviour_clone, fit_normalizer, split_episodes
 from .demonstrations import Demonstrations, collect, concatenate, env_reward_weights, load, reweighted, save
-from .settings import demonstration_seeds, run_selection_seeds
+from .settings import SettingsError, demonstration_seeds, run_selection_seeds
 
 
 def demonstrations_for(
@@ -39,14 +40,14 @@ def demonstrations_for(
         if recorded == (env_id, env_kwargs):
             return demos
         if recorded[0] != env_id or _without_reward(recorded[1] or {}) != _without_reward(env_kwargs):
-            raise ValueError(
-                f"{settings['path']} holds demonstrations of {recorded[0]} with env_kwargs {recorded[1]}, "
+            raise SettingsError(
+                f"pretrain.path: {settings['path']} holds demonstrations of {recorded[0]} with env_kwargs {recorded[1]}, "
                 f"this run trains {env_id} with {env_kwargs}"
             )
         try:
             demos = reweighted(demos, env_reward_weights(env_id, env_kwargs))
         except ValueError as error:
-            raise ValueError(f"{settings['path']}: {error}") from None
+            raise SettingsError(f"pretrain.path: {settings['path']}: {error}") from None
         demos.meta.update(env_kwargs=env_kwargs, reweighted_from=str(settings["path"]))
         return demos
     demos = collect(env_id, demonstration_seeds(settings), env_kwargs, planner=settings["planner"],
@@ -77,8 +78,8 @@ def pretrain(model: Any, env_id: str, entry: Mapping[str, Any], out: Path) -> di
     collected = time.perf_counter() - start
     reused = set(demos.seeds.tolist()) & set(demonstration_seeds(settings, -1)[settings["episodes"] :])
     if reused:
-        raise ValueError(
-            f"DAgger seeds {sorted(reused)[:5]} are among the demonstrations' own; move pretrain.seed"
+        raise SettingsError(
+            f"pretrain.seed: DAgger seeds {sorted(reused)[:5]} are among the demonstrations' own; move pretrain.seed"
         )
     rng = np.random.default_rng(settings["seed"])
     held = np.isin(
@@ -115,5 +116,5 @@ def pretrain(model: Any, env_id: str, entry: Mapping[str, Any], out: Path) -> di
     record = {"settings": dict(settings), "pairs": len(demos), "episodes": int(len(demos.seeds)),
               "demonstration_seconds": collected, "clone": asdict(reports[-1]),
               "rounds": [asdict(r) for r in reports], "dagger_agreement": agreement}  # fmt: skip
-    (out / "pretrain.json").write_text(json.dumps(record, indent=2))
+    (out / PRETRAIN_FILE).write_text(json.dumps(record, indent=2))
     return record

@@ -24,15 +24,19 @@ from pathlib import Path
 from typing import Any
 
 from ekfslam_gym.agents.ppo import algo_class
-
-from .artefacts import (
+from ekfslam_gym.artefacts import (
+    BEST_MODEL,
+    CHECKPOINTS,
+    EVALUATIONS_FILE,
+    MODEL,
+    MONITOR,
+    TENSORBOARD,
+    ModelFiles,
     latest_checkpoint,
-    plot_learning_curve,
     read_run,
-    save_checkpoint,
-    save_with_stats,
-    write_record,
 )
+
+from .artefacts import plot_learning_curve, save_checkpoint, save_with_stats, write_record
 from .settings import (
     NORMALIZE_DEFAULTS,
     TRAIN_KEYS,
@@ -76,7 +80,7 @@ def build_callbacks(out: Path, entry: dict[str, Any], eval_env, n_envs: int):
         def __init__(self, seed: int, **kwargs) -> None:
             super().__init__(**kwargs)
             self.eval_seed = seed
-            previous = out / "evaluations.npz"
+            previous = out / EVALUATIONS_FILE
             if previous.is_file():
                 import numpy as np
 
@@ -102,7 +106,7 @@ def build_callbacks(out: Path, entry: dict[str, Any], eval_env, n_envs: int):
                 best_before = self.best_mean_reward
                 result = super()._on_step()
                 if self.best_mean_reward > best_before:
-                    save_with_stats(self.model, out / "best_model", out)
+                    save_with_stats(self.model, out / BEST_MODEL, out)
                 return result
             return True
 
@@ -170,9 +174,9 @@ def train(
     """
     out = Path(out)
     entry = validate_entry(entry, env_id, seed)
-    checkpoint = latest_checkpoint(out / "checkpoints") if resume else None
+    checkpoint = latest_checkpoint(out / CHECKPOINTS) if resume else None
     if resume and checkpoint is None:
-        raise SettingsError(f"{out / 'checkpoints'} holds no checkpoint to resume from")
+        raise SettingsError(f"{out / CHECKPOINTS} holds no checkpoint to resume from")
 
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     import numpy as np
@@ -186,12 +190,12 @@ def train(
 
     stats = None
     if checkpoint is not None:
-        stats_path = Path(str(checkpoint[0])[: -len(".zip")] + "_vecnormalize.pkl")
+        stats_path = ModelFiles.of(checkpoint[0]).vecnormalize
         stats = stats_path if stats_path.is_file() else None
     # Resumed runs reseed their envs from the step count, so a resumed run is itself reproducible.
     env_seed = seed if checkpoint is None else seed + checkpoint[1]
     # Each run segment logs its episodes to a folder of its own, so resuming never overwrites a monitor file.
-    monitor = out / "monitor" / f"from_{0 if checkpoint is None else checkpoint[1]}"
+    monitor = out / MONITOR / f"from_{0 if checkpoint is None else checkpoint[1]}"
     train_env, eval_env = make_envs(env_id, entry, n_envs, env_seed, monitor, stats)
 
     hyper = {k: schedule(v) if k in ("learning_rate", "clip_range") else v
@@ -200,7 +204,7 @@ def train(
         hyper["policy_kwargs"] = resolve_policy_kwargs(hyper["policy_kwargs"])
     if checkpoint is None:
         model = algo(
-            entry["policy"], train_env, seed=seed, tensorboard_log=str(out / "tb"), verbose=0, **hyper
+            entry["policy"], train_env, seed=seed, tensorboard_log=str(out / TENSORBOARD), verbose=0, **hyper
         )
         if entry["pretrain"] is not None:  # planner-guided: behaviour cloning before PPO
             from .pretraining import pretrain
@@ -213,8 +217,8 @@ def train(
         reset = True
     else:
         path, done = checkpoint
-        model = algo.load(str(path), env=train_env, tensorboard_log=str(out / "tb"))
-        with open(str(path)[: -len(".zip")] + "_rng.pkl", "rb") as handle:
+        model = algo.load(str(path), env=train_env, tensorboard_log=str(out / TENSORBOARD))
+        with open(ModelFiles.of(path).rng, "rb") as handle:
             state = pickle.load(handle)
         random.setstate(state["python"])
         np.random.set_state(state["numpy"])  # noqa: NPY002
@@ -238,12 +242,12 @@ def train(
         model.learn(total_timesteps=remaining, callback=callbacks, progress_bar=bar,
                     reset_num_timesteps=reset, tb_log_name=entry["algo"])  # fmt: skip
         evaluate_at_the_end(callbacks, entry, model.num_timesteps)
-    save_with_stats(model, out / "model", out)
+    save_with_stats(model, out / MODEL, out)
     save_checkpoint(model, out, model.num_timesteps)
     train_env.close()
     eval_env.close()
     plot_learning_curve(out)
-    print(f"trained {model.num_timesteps} steps; model in {out / 'model.zip'}", file=sys.stderr)
+    print(f"trained {model.num_timesteps} steps; model in {ModelFiles(out / MODEL).zip}", file=sys.stderr)
     return out
 
 

@@ -91,28 +91,37 @@ KEEP_CLONING_DEFAULTS: dict[str, Any] = {
 
 
 class SettingsError(ValueError):
-    """A setting that cannot train: its message names the setting, what was wrong and what is allowed."""
+    """A setting that cannot train: its message names the setting (or the file), what was wrong and what is
+    allowed. The library raises it, never ``SystemExit``; a command line turns it into its usage error (exit 2)."""
 
 
 # ---------------------------------------------------------------------------------------------- reading
 def read_entry(config_path: Path, env_id: str) -> dict[str, Any]:
     """The config entry for ``env_id`` with its ``train_settings`` merged in, as the file has it (checked for
     misplaced and unknown settings only: ``validate_entry`` checks the values)."""
-    data = yaml.safe_load(Path(config_path).read_text()) or {}
+    try:
+        data = yaml.safe_load(Path(config_path).read_text()) or {}
+    except yaml.YAMLError as error:
+        raise SettingsError(f"{config_path} is not valid YAML: {error}") from None
+    if not isinstance(data, Mapping):
+        raise SettingsError(f"{config_path} must map env ids to config entries, got {type(data).__name__}")
+    data = dict(data)
     settings = data.pop(SETTINGS_SECTION, None) or {}
     if env_id not in data:
-        raise SystemExit(f"{config_path} has no entry for {env_id!r}; it has {sorted(data)}")
+        raise SettingsError(f"{config_path} has no entry for {env_id!r}; it has {sorted(data)}")
+    if not isinstance(data[env_id], Mapping) or not isinstance(settings, Mapping):
+        raise SettingsError(f"{config_path}: the {env_id!r} entry and {SETTINGS_SECTION} must be mappings")
     entry = dict(data[env_id])
     misplaced = sorted(SETTINGS_KEYS & set(entry))
     if misplaced:
-        raise SystemExit(
+        raise SettingsError(
             f"{config_path}: {misplaced} in the {env_id!r} entry would reach PPO under rl-zoo3; "
             f"put them under '{SETTINGS_SECTION}: {{{env_id}: ...}}'"
         )
     extra = dict(settings.get(env_id) or {})
     unknown = sorted(set(extra) - SETTINGS_KEYS)
     if unknown:
-        raise SystemExit(
+        raise SettingsError(
             f"{config_path}: unknown {SETTINGS_SECTION} keys {unknown} for {env_id!r}; "
             f"known: {sorted(SETTINGS_KEYS)}"
         )
@@ -122,12 +131,12 @@ def read_entry(config_path: Path, env_id: str) -> dict[str, Any]:
 
 def load_entry(config_path: Path, env_id: str) -> dict[str, Any]:
     """The config entry for ``env_id``, every training key defaulted and checked (``validate_entry``);
-    SystemExit naming the file otherwise."""
+    SettingsError naming the file otherwise."""
     entry = read_entry(config_path, env_id)
     try:
         return validate_entry(entry, env_id)
     except SettingsError as error:
-        raise SystemExit(f"{config_path}, entry {env_id!r}: {error}") from None
+        raise SettingsError(f"{config_path}, entry {env_id!r}: {error}") from None
 
 
 def resolve_entry(
@@ -155,7 +164,7 @@ def parse_hyperparams(pairs: list[str]) -> dict[str, Any]:
     for pair in pairs:
         key, sep, value = pair.partition("=")
         if not sep or not key:
-            raise SystemExit(f"--hyperparams takes KEY=VALUE pairs, got {pair!r}")
+            raise SettingsError(f"--hyperparams takes KEY=VALUE pairs, got {pair!r}")
         out[key] = yaml.safe_load(value)
     return out
 
@@ -269,14 +278,20 @@ def _check_hyperparameters(entry: Mapping[str, Any]) -> None:
 
 
 def _check_env(env_id: str, env_kwargs: Mapping[str, Any]) -> None:
-    """``env_kwargs`` build ``env_id`` (the env's own config checks name the field)."""
+    """``env_kwargs`` build ``env_id`` (the env's own config checks name the field), on a layout that is not a
+    held-out family (``ekfslam_gym.seeds.HELDOUT_FAMILIES``: never trained on)."""
     import gymnasium as gym
 
     import ekfslam_gym  # noqa: F401  (registers the env ids)
+    from ekfslam_gym.seeds import check_training_family
 
     qualified = env_id if ":" in env_id else f"ekfslam_gym:{env_id}"
     try:
-        gym.make(qualified, **dict(env_kwargs)).close()
+        env = gym.make(qualified, **dict(env_kwargs))
+        config = getattr(env.unwrapped, "config", None)
+        env.close()
+        if config is not None:
+            check_training_family(config.world.layout, "the training envs")
     except (TypeError, ValueError, KeyError, gym.error.Error) as error:
         raise SettingsError(f"env_kwargs for {env_id}: {error}") from None
 

@@ -25,11 +25,11 @@ from pathlib import Path
 from typing import Any
 
 from ekfslam_gym.agents.ppo import PPOAgent
+from ekfslam_gym.artefacts import CHECKPOINTS, MODEL, RECORD_FILE, ModelFiles, latest_checkpoint, read_run
 from ekfslam_gym.evaluation.report import json_safe
 from ekfslam_gym.evaluation.rollout import evaluate_agent
 from ekfslam_gym.seeds import SELECTION_SEEDS, check_not_held_out
 
-from .artefacts import latest_checkpoint, read_run
 from .run import resume, train
 
 RESULT_FILE = "result.json"
@@ -62,7 +62,7 @@ def trial_state(folder: Path) -> str:
     """``"done"`` (``result.json`` exists), ``"resume"`` (checkpoints, no result) or ``"new"``."""
     if (folder / RESULT_FILE).is_file():
         return "done"
-    if latest_checkpoint(folder / "checkpoints") is not None:
+    if latest_checkpoint(folder / CHECKPOINTS) is not None:
         return "resume"
     return "new"
 
@@ -85,21 +85,21 @@ def run_trial(trial: Trial) -> dict[str, Any]:
     torch.set_num_threads(1)
     started = time.perf_counter()
     if state == "resume":
-        before = latest_checkpoint(folder / "checkpoints")[1]
+        before = latest_checkpoint(folder / CHECKPOINTS)[1]
         resume(folder, int(trial.entry["n_timesteps"]), progress=False)
     else:
         before = 0
-        if (folder / "config.yaml").is_file():  # an interrupted run with no checkpoint: its logs are stale
+        if (folder / RECORD_FILE).is_file():  # an interrupted run with no checkpoint: its logs are stale
             shutil.rmtree(folder)
         train(trial.env_id, trial.seed, dict(trial.entry), folder, progress=False,
                        command=list(trial.command))  # fmt: skip
     train_seconds = time.perf_counter() - started
-    timesteps = latest_checkpoint(folder / "checkpoints")[1]
+    timesteps = latest_checkpoint(folder / CHECKPOINTS)[1]
 
     env_id, _, entry = read_run(folder)
     started = time.perf_counter()
     # make_env hands a max_episode_steps among the training env_kwargs to gym.make as its own argument
-    episodes = evaluate_agent(PPOAgent(folder / "model.zip"), env_id, trial.eval_seeds, entry["env_kwargs"],
+    episodes = evaluate_agent(PPOAgent(ModelFiles(folder / MODEL).zip), env_id, trial.eval_seeds, entry["env_kwargs"],
                               label=trial.name)  # fmt: skip
     result = {
         "env_id": env_id,

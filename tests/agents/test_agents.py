@@ -1,4 +1,5 @@
-"""The agents: every one runs an episode with valid actions; the greedy planner's pieces do what they claim."""
+"""The agents: every one runs an episode with valid actions of the kind it declares; the greedy planner's pieces
+do what they claim."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import pytest
 from ekfslam_gym.agents import (
     AGENTS,
     BASELINES,
+    ActionKind,
     CircleAgent,
     GreedyInfoGainAgent,
     LawnmowerAgent,
@@ -18,8 +20,9 @@ from ekfslam_gym.agents import (
     wall_scan,
 )
 from ekfslam_gym.agents.greedy import expected_readings, rollout_gain
-from ekfslam_gym.agents.greedy.grid import distance_field, update_walls
-from ekfslam_gym.agents.ppo import model_paths
+from ekfslam_gym.agents.navigation import distance_field, update_walls
+from ekfslam_gym.agents.planners import PLANNER_CLASSES, PLANNERS, make_planner
+from ekfslam_gym.agents.ppo import model_paths, trained_action_kind
 
 import ekfslam_gym  # noqa: F401  (registers the env ids)
 from ekfslam_gym.filter.models import range_bearing
@@ -37,6 +40,56 @@ def test_every_baseline_runs_an_episode_with_valid_actions(name):
     for action in actions:
         assert isinstance(action, np.ndarray) and action.dtype == np.float32 and action.shape == (2,)
         assert np.all(np.isfinite(action)) and np.all(np.abs(action) <= 1.0)
+
+
+def _is_of_kind(action, kind: ActionKind) -> bool:
+    if kind is ActionKind.PRIMITIVES:
+        return isinstance(action, np.int64)
+    return isinstance(action, np.ndarray) and action.dtype == np.float32 and action.shape == (2,)
+
+
+@pytest.mark.parametrize(
+    ("name", "kind"), [(n, c.action_kind) for n, cs in PLANNER_CLASSES.items() for c in cs]
+)
+def test_every_planner_returns_actions_of_the_kind_it_declares(name, kind):
+    env = gym.make("EKFSLAM-v0", action={"kind": str(kind), "hold": 10}, max_episode_steps=4)
+    planner = make_planner(name, str(kind))
+    assert planner.action_kind is kind and ActionKind.of_env(env) is kind
+    observation, _ = env.reset(seed=3)
+    planner.reset(env, seed=3)
+    for _ in range(4):
+        action = planner.act(observation)
+        assert _is_of_kind(action, kind), (name, kind, action)
+        assert env.action_space.contains(action)
+        planner.executed(action)  # what a learner drove instead (DAgger): the planner only notes it
+        observation, *_ = env.step(action)
+    env.close()
+
+
+def test_the_planners_interfaces_are_read_from_their_declarations():
+    assert PLANNERS == {"greedy": ("primitives",), "frontier": ("waypoint", "primitives")}
+    assert all(cls.action_kind is ActionKind.VELOCITY for name, cls in AGENTS.items() if name != "ppo")
+    with pytest.raises(ValueError, match="demonstrates in action.kind primitives, not 'waypoint'"):
+        make_planner("greedy", "waypoint")
+    with pytest.raises(ValueError, match="unknown demonstration planner"):
+        make_planner("lawnmower", "velocity")
+
+
+def test_an_action_kind_makes_its_own_type_of_action():
+    assert ActionKind("primitives") is ActionKind.PRIMITIVES and str(ActionKind.WAYPOINT) == "waypoint"
+    index = ActionKind.PRIMITIVES.action(np.array([3]))
+    assert isinstance(index, np.int64) and index == 3
+    goal = ActionKind.WAYPOINT.action([0.5, -0.25])
+    assert goal.dtype == np.float32 and goal.shape == (2,) and goal.tolist() == [0.5, -0.25]
+    with pytest.raises(ValueError):
+        ActionKind.VELOCITY.action([1.0, 2.0, 3.0])
+    with pytest.raises(ValueError):
+        ActionKind("teleport")
+    # a saved policy's kind: a Discrete space is primitives; a Box is what its training env's settings say
+    assert trained_action_kind(gym.spaces.Discrete(7), None) is ActionKind.PRIMITIVES
+    box = gym.spaces.Box(-1.0, 1.0, (2,))
+    assert trained_action_kind(box, {"action": {"kind": "waypoint", "hold": 10}}) is ActionKind.WAYPOINT
+    assert trained_action_kind(box, {"max_episode_steps": 50}) is None
 
 
 @pytest.mark.parametrize("name", ["lawnmower", "greedy"])

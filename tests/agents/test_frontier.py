@@ -13,16 +13,24 @@ from ekfslam_gym.agents.base import wall_scan
 from ekfslam_gym.agents.frontier import (
     FrontierPrimitivesPlanner,
     FrontierWaypointPlanner,
+    Mode,
     coverage_and_bounds,
+)
+from ekfslam_gym.agents.navigation import (
+    arc_poses,
+    arc_vetoed,
+    carrot,
     frontier_cells,
     frontier_regions,
     grid_paths,
+    line_is_free,
     nearest_paths,
     path_sources,
+    scan_geometry,
+    to_world,
+    trace_path,
+    update_walls,
 )
-from ekfslam_gym.agents.greedy.grid import update_walls
-from ekfslam_gym.agents.greedy.rollout import arc_poses
-from ekfslam_gym.agents.greedy.veto import arc_vetoed, scan_geometry, to_world
 
 import ekfslam_gym  # noqa: F401  (registers the env ids)
 from ekfslam_gym.envs import EKFSLAMEnv
@@ -86,6 +94,32 @@ def test_grid_paths_go_around_walls_and_not_through_corners():
     sealed[2, :] = True
     dist, _ = grid_paths(sealed, _source((5, 5), 0, 0), 0.5)
     assert np.isinf(dist[3:]).all() and np.isfinite(dist[:2]).all()
+
+
+def test_a_traced_path_runs_from_the_source_to_the_goal_around_a_wall_in_metres():
+    blocked = np.zeros((4, 5), dtype=bool)
+    blocked[0:3, 2] = True  # a wall in column 2, open in the top row (row 3)
+    _, parent = grid_paths(blocked, _source((4, 5), 0, 0), 0.5)
+    path = trace_path(parent, 5, 0, 4, -1.0, 2.0, 0.5)  # the grid's corner at (-1, 2), cells of 0.5 m
+    assert path[0].tolist() == [-0.75, 2.25] and path[-1].tolist() == [1.25, 2.25]  # cell centres
+    cols = np.round((path[:, 0] + 1.0) / 0.5 - 0.5).astype(int)
+    rows = np.round((path[:, 1] - 2.0) / 0.5 - 0.5).astype(int)
+    assert not blocked[rows, cols].any() and rows.max() == 3  # round the wall's open end
+    steps = np.hypot(*np.diff(path, axis=0).T)
+    assert np.all((np.isclose(steps, 0.5)) | np.isclose(steps, 0.5 * math.sqrt(2)))  # neighbours only
+    assert trace_path(parent, 5, 0, 0, -1.0, 2.0, 0.5).tolist() == [[-0.75, 2.25]]  # the source alone
+
+
+def test_the_carrot_is_the_furthest_point_in_reach_that_no_wall_hides():
+    wall = np.zeros((6, 6), dtype=bool)
+    path = np.array([[0.75 + 0.5 * k, 0.25] for k in range(4)])  # along the bottom row, cells of 0.5 m
+    assert carrot(path, 0, wall, 0.0, 0.0, 0.5, 0.25, 0.25, 1.1) == 1  # within 1.1 m of (0.25, 0.25)
+    assert carrot(path, 0, wall, 0.0, 0.0, 0.5, 0.25, 0.25, 10.0) == 3
+    assert carrot(path, 2, wall, 0.0, 0.0, 0.5, 0.25, 0.25, 1.1) == 2  # never behind the progress index
+    wall[0, 3] = True  # a wall cell at x in [1.5, 2) on the line of sight
+    assert carrot(path, 0, wall, 0.0, 0.0, 0.5, 0.25, 0.25, 10.0) == 1
+    assert not line_is_free(wall, 0.0, 0.0, 0.5, 0.25, 0.25, 2.25, 0.25)
+    assert line_is_free(wall, 0.0, 0.0, 0.5, 1.75, 0.25, 1.75, 2.75)  # the start cell is not checked
 
 
 def test_grid_paths_from_several_sources_take_the_cheapest():
@@ -170,8 +204,6 @@ class _PublicEnv:
 
     def __init__(self):
         self.unwrapped = self
-        self._memory = None
-        self._bounds = None
 
     @property
     def coverage_memory(self):
@@ -204,7 +236,7 @@ def _episode(seed, steps=None, env_id="EKFSLAM-v0", **kwargs):
     observation, _ = env.reset(seed=seed)
     agent = FrontierAgent(**kwargs)
     agent.reset(env, seed=seed)
-    actions, modes = [], set()
+    actions, modes = [], set()  # the modes of the state machine the agent went through
     while True:
         action = agent.act(observation)
         actions.append(action)
@@ -245,7 +277,8 @@ def test_goes_round_the_loop(monkeypatch):
     monkeypatch.setattr(EKFSLAMEnv, "true_landmarks", property(forbidden))
     _, info, seen, modes = _episode(2, env_id="EKFSLAM-Loop-v0")
     assert seen >= 0.9 and info["collisions"] == 0
-    assert modes == {"explore", "revisit"}  # it ran out of frontiers and went back to improve the map
+    assert modes == {Mode.EXPLORE, Mode.REVISIT}  # it ran out of frontiers and went back to improve the map
+    assert {str(mode) for mode in modes} == {"explore", "revisit"}
 
 
 WAYPOINT_KWARGS = {"action": {"kind": "waypoint", "hold": 10}, "max_episode_steps": 50}

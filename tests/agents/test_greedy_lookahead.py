@@ -7,9 +7,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from ekfslam_gym.agents import AGENTS, GreedyInfoGainAgent, GreedyLookaheadAgent, make_agent, wall_scan
-from ekfslam_gym.agents.greedy.grid import count_new
 from ekfslam_gym.agents.greedy.rollout import rollout
-from ekfslam_gym.agents.greedy.veto import scan_geometry, to_world
+from ekfslam_gym.agents.navigation import count_new, scan_geometry, to_world
 
 import ekfslam_gym  # noqa: F401  (registers the env ids)
 from tests.agent_runs import agent_actions

@@ -1,12 +1,11 @@
-"""Every command line: one ``usage:`` style, and bad input ending in one line on stderr and exit status 2 (a
-traceback only with EKFSLAM_DEBUG=1); evaluate's single output per run (--format)."""
+"""Every command line: one ``usage:`` style and one ``python -m`` style; the user's own bad input ending in one
+line on stderr and exit status 2, anything deeper in a traceback; evaluate's single output per run (--format)."""
 
 from __future__ import annotations
 
 import importlib
 import importlib.util
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -15,7 +14,7 @@ import pytest
 import tomllib
 
 from ekfslam_gym.cli import common
-from ekfslam_gym.cli.common import DEBUG_ENV, command_line
+from ekfslam_gym.cli.common import AGENT_NAMES, command_line
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPTS = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
@@ -54,14 +53,51 @@ def test_every_help_reads_usage_ekfslam_name(script, capsys):
 
 
 def test_python_dash_m_shows_the_same_usage_as_the_console_script():
-    """``python -m ekfslam_gym.<name>`` runs the same main: its --help names the installed command."""
-    for script in SCRIPTS:
-        module = "ekfslam_gym." + script.removeprefix("ekfslam-")
+    """``python -m ekfslam_gym.cli.<name>`` runs the same main: its --help names the installed command."""
+    for script, target in SCRIPTS.items():
+        module = target.partition(":")[0]
+        assert module == "ekfslam_gym.cli." + script.removeprefix("ekfslam-")
         run = subprocess.run(
             [sys.executable, "-m", module, "--help"], capture_output=True, text=True, cwd=ROOT
         )
         assert run.returncode == 0, (module, run.stderr)
         assert run.stdout.startswith(f"usage: {script} "), (module, run.stdout[:80])
+
+
+def test_the_package_has_no_other_python_dash_m_entry_point():
+    """One ``python -m`` style: no module outside ``ekfslam_gym/cli/`` runs a command line (``compiled.py``, run
+    as a script, prints the kernels' sources for the Makefile: a build step, not a command)."""
+    package = ROOT / "ekfslam_gym"
+    others = sorted(
+        str(path.relative_to(ROOT))
+        for path in package.rglob("*.py")
+        if "cli" not in path.relative_to(package).parts[:1]
+        and (path.name == "__main__.py" or 'if __name__ == "__main__"' in path.read_text())
+    )
+    assert others == ["ekfslam_gym/compiled.py"]
+
+
+@pytest.mark.parametrize("script", sorted(SCRIPTS))
+def test_help_imports_only_what_the_parser_needs(script):
+    """``--help`` runs without SciPy's statistics, torch, SB3, matplotlib or the agents (numba): each costs a
+    large part of a second or more at start-up (bench/startup.py times them)."""
+    heavy = ("scipy.stats", "torch", "stable_baselines3", "matplotlib", "ekfslam_gym.agents", "numba")
+    code = (
+        "import contextlib, io, sys\n"
+        f"from {SCRIPTS[script].replace(':', ' import ')}\n"
+        "with contextlib.redirect_stdout(io.StringIO()), contextlib.suppress(SystemExit):\n"
+        "    main(['--help'])\n"
+        f"print(sorted(m for m in {heavy!r} if m in sys.modules))\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == "[]", f"{script} --help imports {run.stdout.strip()}"
+
+
+def test_the_help_agent_names_are_the_registry():
+    from ekfslam_gym.agents import AGENTS
+
+    assert AGENT_NAMES == tuple(AGENTS)
 
 
 # ---------------------------------------------------------------------------------------------- the wrapper
@@ -76,39 +112,43 @@ def _raiser(error: BaseException):
 @pytest.mark.parametrize(
     "error, line",
     [
-        (ValueError("unknown config field world.n_landmark; known: ['n_landmarks']"),
-         "ekfslam-demo: error: unknown config field world.n_landmark; known: ['n_landmarks']"),
-        (KeyError("no metric 'ate'"), "ekfslam-demo: error: no metric 'ate'"),
-        (FileNotFoundError(2, "No such file or directory", "runs/x.zip"),
-         "ekfslam-demo: error: runs/x.zip: no such file or directory"),
         (SystemExit("configs/ppo.yaml has no entry for 'X'"), "ekfslam-demo: error: configs/ppo.yaml has no entry for 'X'"),
-        (ValueError("two\nlines"), "ekfslam-demo: error: two lines"),
+        (SystemExit("two\nlines"), "ekfslam-demo: error: two lines"),
     ],
 )  # fmt: skip
-def test_bad_input_is_one_line_and_exit_2(error, line, capsys, monkeypatch):
-    monkeypatch.delenv(DEBUG_ENV, raising=False)
+def test_an_exit_with_a_message_is_one_line_and_exit_2(error, line, capsys):
     with pytest.raises(SystemExit) as info:
         _raiser(error)()
     assert info.value.code == 2
     assert capsys.readouterr().err == line + "\n"
 
 
-def test_other_exceptions_are_bugs_reported_in_one_line_with_exit_1(capsys, monkeypatch):
-    monkeypatch.delenv(DEBUG_ENV, raising=False)
-    with pytest.raises(SystemExit) as info:
-        _raiser(RuntimeError("boom"))()
-    assert info.value.code == 1
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "unexpected RuntimeError: boom" in err and f"{DEBUG_ENV}=1" in err
+@pytest.mark.parametrize(
+    "error",
+    [ValueError("a deep check"), KeyError("a missing key"), FileNotFoundError(2, "No such file", "x.zip"),
+     RuntimeError("boom")],
+)  # fmt: skip
+def test_a_deep_error_propagates_with_its_traceback(error, capsys):
+    """Only the command's own checks of the user's input exit 2: anything raised below ``main`` is not
+    reported as a usage error, whatever its type."""
+    with pytest.raises(type(error)):
+        _raiser(error)()
+    assert capsys.readouterr().err == ""
 
 
-def test_the_debug_variable_lets_the_exception_through(monkeypatch):
-    monkeypatch.setenv(DEBUG_ENV, "1")
-    with pytest.raises(ValueError, match="bad"):
-        _raiser(ValueError("bad"))()
-    monkeypatch.setenv(DEBUG_ENV, "0")  # 0 means off
-    with pytest.raises(SystemExit):
-        _raiser(ValueError("bad"))()
+def test_a_deep_error_ends_the_process_with_a_traceback_and_status_1(tmp_path):
+    """A console script run on a file whose reading fails deep inside (not a check of main's) exits 1 with
+    Python's traceback."""
+    code = (
+        "from ekfslam_gym.cli import common\n"
+        "@common.command_line('demo')\n"
+        "def main(argv=None):\n"
+        "    {}['filter']\n"
+        "raise SystemExit(main())\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert run.returncode == 1
+    assert "Traceback" in run.stderr and "KeyError: 'filter'" in run.stderr
 
 
 def test_exit_statuses_and_return_values_pass_through(capsys):
@@ -206,6 +246,18 @@ def test_compare_tradeoff_sweep_and_replay_name_a_missing_file(tmp_path, capsys)
     _fails(capsys, replay.main, ["--data", tmp_path / "nope.dat"], "ekfslam-replay: error:", "nope.dat")
 
 
+def test_sweep_names_a_bad_setting_before_any_trial(tmp_path, capsys):
+    """A setting's error comes from the library as a ValueError (SettingsError); the command names it, exit 2."""
+    from ekfslam_gym.cli.sweep import main
+
+    base = ["--seeds", "0", "--out", tmp_path / "sweep"]
+    _fails(capsys, main, [*base, "--hyperparams", "n_steps"], "ekfslam-sweep: error:", "KEY=VALUE")
+    _fails(
+        capsys, main, [*base, "--hyperparams", "learning_rat=0.1"], "ekfslam-sweep: error:", "learning_rat"
+    )
+    assert not (tmp_path / "sweep").exists()
+
+
 def test_train_script_bad_input_is_one_line(tmp_path):
     """``python train.py``: a missing config and a misspelt --hyperparams key end in one line, no traceback."""
     cases = [
@@ -216,7 +268,7 @@ def test_train_script_bad_input_is_one_line(tmp_path):
     ]  # fmt: skip
     for argv, fragment in cases:
         run = subprocess.run([sys.executable, str(ROOT / "train.py"), *argv], capture_output=True, text=True,
-                             cwd=tmp_path, env={**os.environ, DEBUG_ENV: ""})  # fmt: skip
+                             cwd=tmp_path)  # fmt: skip
         assert run.returncode != 0 and "Traceback" not in run.stderr, run.stderr
         last = run.stderr.strip().splitlines()[-1]
         assert fragment in last and ": error: " in last, last

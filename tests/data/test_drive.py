@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ekfslam_gym.cli.drive import main
 from ekfslam_gym.data.course import read_sensor_data, read_world
-from ekfslam_gym.data.drive import main
 from ekfslam_gym.data.synthetic import loop_poses, simulate_drive
 
 

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from ekfslam_gym.cli.graph import main as graph_cli
-from ekfslam_gym.cli.graph import read_graph
 from ekfslam_gym.data.g2o import read_g2o, write_g2o
+from ekfslam_gym.data.graph_files import read_graph
 from ekfslam_gym.data.matfile import read_mat_graph
 from ekfslam_gym.graph.optimizer import FactorGraph, Values, gauss_newton, levenberg_marquardt
 from tests.datapaths import freiburg_dir
@@ -155,8 +155,8 @@ def test_g2o_reader_accepts_comments_blank_lines_and_any_order(tmp_path):
 @pytest.mark.parametrize(
     ("line_no", "line", "message"),
     [
-        (2, "VERTEX_SE2 1 1 0", "needs 4 values, found 3"),
-        (4, "EDGE_SE2 0 1 1 0 0 1 0 0 1 0", "needs 11 values, found 10"),
+        (2, "VERTEX_SE2 1 1 0", "needs 4 values, got 3"),
+        (4, "EDGE_SE2 0 1 1 0 0 1 0 0 1 0", "needs 11 values, got 10"),
         (3, "VERTEX_XY 7 1 one", "malformed VERTEX_XY"),
         (1, "VERTEX_SE2 0.5 0 0 0", "malformed VERTEX_SE2"),
         (3, "VERTEX_XY 1 1 1", "vertex 1 defined twice"),

@@ -145,8 +145,11 @@ def test_noise_formats(write):
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("ODOMETRY 0 1 0.1 0 0 0.0001 0 0 4e-06\n", "victoria_park.txt:1: ODOMETRY needs 11 fields, got 9"),
-        ("LANDMARK 4 5 11.5 -3.2 0.4 0\n", ":1: LANDMARK needs 7 fields, got 6"),
+        (
+            "ODOMETRY 0 1 0.1 0 0 0.0001 0 0 4e-06\n",
+            "victoria_park.txt:1: ODOMETRY line needs 11 values, got 9",
+        ),
+        ("LANDMARK 4 5 11.5 -3.2 0.4 0\n", ":1: LANDMARK line needs 7 values, got 6"),
         ("VERTEX_SE2 0 0 0 0\nPOINT 1 2 3\n", ":2: unknown tag 'POINT'"),
         ("ODOMETRY a 1 0.1 0 0 1 0 0 1 0 1\n", ":1: ODOMETRY ids must be integers"),
         ("BR -1 2 0.1 1.0 0.1 0.1\n", ":1: BR ids must be non-negative"),

@@ -52,7 +52,7 @@ def test_bad_shapes_and_files_are_refused(tmp_path):
         write_tum(tmp_path / "c.tum", np.arange(2.0), np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]]))
     bad = tmp_path / "bad.tum"
     bad.write_text("0 1 2 3 0 0 0\n")
-    with pytest.raises(ValueError, match="8 numbers"):
+    with pytest.raises(ValueError, match="needs 8 values"):
         read_tum(bad)
 
 

@@ -1,7 +1,6 @@
 """The README, the docs and the configs cannot drift from the code.
 
-- every Python block of the README and the docs runs (``python`` blocks; ``py`` marks one that needs another
-  environment, such as RLlib's);
+- (every Python block of the docs runs, from outside the checkout: ``tests/test_docs_site.py``);
 - every repository path, dotted ``ekfslam_gym`` name, command-line flag and config key they name exists
   (the research log, a record of experiments, is held to paths and flags only: options it tried may be gone);
 - the generated pages and ``configs/env/default.yaml`` match the code (``docs/generate.py --check``), and every
@@ -22,8 +21,6 @@ from pathlib import Path
 
 import pytest
 import yaml
-
-from tests.datapaths import victoria_park_file
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
@@ -56,27 +53,7 @@ def _code(text: str) -> list[str]:
     return blocks + re.findall(r"`([^`\n]+)`", prose)
 
 
-# ------------------------------------------------------------------------------------ code blocks run
-# Pages whose python blocks read a shared data set, and where the tests find it.
-DATA_PAGES = {"real-data-victoria-park.md": victoria_park_file}
-PYTHON_PAGES = [p for p in MARKDOWN if "\n```python\n" in p.read_text()]
-
-
-@pytest.mark.parametrize("page", PYTHON_PAGES, ids=_rel)
-def test_python_blocks_run(page: Path, monkeypatch, tmp_path) -> None:
-    """A page's python blocks, run in order in one namespace (as a reader pastes them), from the repository."""
-    mktestdocs = pytest.importorskip("mktestdocs", reason="the docs extra (make install) runs the docs' code")
-    source = "\n".join(mktestdocs.grab_code_blocks(page.read_text(), lang="python"))
-    assert source.strip()
-    monkeypatch.chdir(ROOT)
-    if page.name in DATA_PAGES:  # its blocks read a shared data set by its bare file name
-        found = DATA_PAGES[page.name]()
-        if found is None:
-            pytest.skip(f"{page.name} reads a data set absent here (tests/datapaths.py)")
-        monkeypatch.chdir(found.parent)
-    monkeypatch.syspath_prepend(str(ROOT))
-    monkeypatch.setenv("MPLBACKEND", "Agg")
-    exec(compile(source, str(page), "exec"), {"__name__": "__main__"})
+# The python blocks run from an empty folder outside the checkout: tests/test_docs_site.py.
 
 
 # ------------------------------------------------------------------------------------ names exist
@@ -237,7 +214,7 @@ def test_the_consistency_checks_catch_what_they_are_for(tmp_path) -> None:
     page = tmp_path / "page.md"
     page.write_text(
         "Set `reward.map_quality` or `reward: {coverage: 1.0, return_home: 2}`; read `configs/nothing.yaml` and "
-        "`ekfslam_gym.envs.NoSuchThing`.\n\n```bash\npython -m ekfslam_gym.evaluate --agent greedy --no-such-flag\n"
+        "`ekfslam_gym.envs.NoSuchThing`.\n\n```bash\nekfslam-evaluate --agent greedy --no-such-flag\n"
         "python train.py --config configs/ppo.yaml --seed 0\n```\n"
     )
     keys = {f"{s}.{k}" for s, k in _config_keys(page)}

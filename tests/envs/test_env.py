@@ -167,7 +167,7 @@ def test_step_before_reset_is_an_error():
     [
         (dict(sensor={"max_range": -1.0}), "max_range"),
         (dict(world={"n_landmarks": 0}), "world.n_landmarks"),
-        (dict(world={"layout": "maze"}), "world.layout"),
+        (dict(world={"layout": "castle"}), "world.layout"),
         (dict(reward={"info_gan": 1.0}), "reward.info_gan"),
         (dict(filter={"landmark_prior": "big"}), "filter.landmark_prior"),
         (dict(max_episode_steps=0), "max_episode_steps"),
@@ -337,13 +337,22 @@ def test_readings_never_cross_a_wall():
     assert count > 50
 
 
-def test_filter_failure_terminates_without_raising():
+def test_filter_failure_terminates_without_raising(monkeypatch):
+    """The filter signals a numerical failure with ``FilterDivergedError`` (its public contract: an innovation
+    covariance or Sigma that loses positive definiteness raises it); the env ends the episode and reports it
+    instead of raising."""
+    from ekfslam_gym.filter.ekf import FilterDivergedError
+
     env = EKFSLAMEnv()
     env.reset(seed=0)
-    env.filter._cov[:] = -np.eye(env.filter.state_size)
-    env.filter._tracking = True
+
+    def diverge(*args, **kwargs):
+        raise FilterDivergedError("innovation covariance is not positive definite")
+
+    monkeypatch.setattr(env.filter, "update", diverge)
     _, reward, terminated, truncated, info = env.step(np.zeros(2))
     assert terminated and not truncated and info["filter_failed"] and reward == 0.0
+    assert all(value == 0.0 for value in info["reward_terms"].values())
 
 
 @pytest.mark.slow

@@ -45,7 +45,7 @@ def make_scene(**overrides: object) -> Scene:
 
 @pytest.fixture
 def renderer():
-    r = Renderer("rgb_array", width=W, height=H)
+    r = Renderer("rgb_array", width=W, height=H, options={"legend": False})
     yield r
     r.close()
 
@@ -216,7 +216,7 @@ def test_bad_bounds_raise(renderer: Renderer) -> None:
 
 def test_rgb_array_never_opens_the_display() -> None:
     pygame.display.quit()
-    r = Renderer("rgb_array", width=W, height=H)
+    r = Renderer("rgb_array", width=W, height=H, options={"legend": False})
     r.render(make_scene())
     r.close()
     assert not pygame.display.get_init()
@@ -224,7 +224,7 @@ def test_rgb_array_never_opens_the_display() -> None:
 
 def test_human_mode_runs_headless(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
-    r = Renderer("human", width=W, height=H, fps=1000)
+    r = Renderer("human", width=W, height=H, fps=1000, options={"legend": False})
     try:
         with pytest.warns(UserWarning, match="shows nothing: SDL's video driver is 'dummy'"):
             assert r.render(make_scene()) is None
@@ -264,7 +264,7 @@ def test_human_mode_without_a_display_says_so(monkeypatch: pytest.MonkeyPatch) -
         raise pygame.error("No available video device")
 
     monkeypatch.setattr(pygame.display, "init", no_video_device)
-    r = Renderer("human", width=W, height=H)
+    r = Renderer("human", width=W, height=H, options={"legend": False})
     with pytest.raises(
         RuntimeError, match=r"needs a display and SDL could not open one \(No available video"
     ):
@@ -285,3 +285,160 @@ def test_missing_pygame_says_how_to_install(monkeypatch: pytest.MonkeyPatch) -> 
 def test_scene_is_frozen() -> None:
     with pytest.raises(dataclasses.FrozenInstanceError):
         make_scene().text = "changed"  # type: ignore[misc]
+
+
+# ------------------------------------------------------------------------------------ what the sensor sees
+def fov_pixels(frame: np.ndarray, legend_band: int = 0) -> np.ndarray:
+    """(row, col) of every pixel shaded as the sensor's view (above the legend, whose sample is shaded too)."""
+    return np.argwhere((frame[: len(frame) - legend_band] == np.array(render.FOV_FILL)).all(axis=-1))
+
+
+def pixels_to_world(r: Renderer, bounds: np.ndarray, rows_cols: np.ndarray) -> np.ndarray:
+    """World points (m) at the centres of pixels (row, col), the inverse of ``world_to_pixels``."""
+    r.world_to_pixels(bounds, np.zeros(2))  # sets the scale and origin for these bounds
+    col, row = rows_cols[:, 1] + 0.5, rows_cols[:, 0] + 0.5
+    return np.stack([(col - r._ox) / r._scale, (r._oy - row) / r._scale], axis=1)
+
+
+def crosses(start: np.ndarray, ends: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """For each end (n, 2): does the segment start-end cross the centre line of any wall (k, 4)?"""
+
+    def orient(a, b, c):
+        return (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (
+            c[..., 0] - a[..., 0]
+        )
+
+    p, q = np.broadcast_to(start, ends.shape)[:, None], ends[:, None]
+    a, b = walls[None, :, :2], walls[None, :, 2:]
+    proper = (orient(p, q, a) * orient(p, q, b) < 0) & (orient(a, b, p) * orient(a, b, q) < 0)
+    return proper.any(axis=1)
+
+
+BLOCKING = np.array([[0, 0, 10, 0], [10, 0, 10, 8], [10, 8, 0, 8], [0, 8, 0, 0], [4.5, 1.0, 4.5, 5.0]], float)
+
+
+def test_field_of_view_stops_at_walls() -> None:
+    """A wall 1.5 m ahead of the robot: no pixel behind it is shaded, though the open wedge reaches there."""
+    r = Renderer("rgb_array", width=400, height=360, options={"legend": False})
+    scene = make_scene(walls=BLOCKING, max_range=5.0, fov=np.pi / 2, read_ids=np.array([], int))
+    frame = r.render(scene)
+    bounds = scene.bounds
+    shaded = pixels_to_world(r, bounds, fov_pixels(frame))
+    assert len(shaded) > 500
+    assert not crosses(scene.pose_true[:2], shaded, BLOCKING).any()
+    # the check is not vacuous: the unoccluded wedge has many pixels behind that wall
+    rows, cols = np.mgrid[0:360, 0:400]
+    grid = pixels_to_world(r, bounds, np.stack([rows.ravel(), cols.ravel()], axis=1))
+    d = grid - scene.pose_true[:2]
+    in_wedge = (np.hypot(*d.T) < 5.0) & (np.abs(np.arctan2(d[:, 1], d[:, 0])) < np.pi / 4)
+    assert crosses(scene.pose_true[:2], grid[in_wedge], BLOCKING).sum() > 500
+    r.close()
+
+
+def test_field_of_view_stays_inside_the_world() -> None:
+    """No walls at all, a sensor reaching far: the shading ends at the world's edge."""
+    r = Renderer("rgb_array", width=400, height=360, options={"legend": False})
+    scene = make_scene(walls=np.zeros((0, 4)), max_range=50.0, fov=2 * np.pi, read_ids=np.array([], int))
+    frame = r.render(scene)
+    shaded = pixels_to_world(r, scene.bounds, fov_pixels(frame))
+    assert len(shaded) > 1000
+    half_px = 1.0 / r._scale
+    assert (shaded >= scene.bounds[:2] - half_px).all() and (shaded <= scene.bounds[2:] + half_px).all()
+    r.close()
+
+
+def test_field_of_view_is_drawn_from_the_true_pose() -> None:
+    """The shading is where the sensor is (it reads from the true pose), not where the filter thinks it is."""
+    r = Renderer("rgb_array", width=400, height=360, options={"legend": False})
+    scene = make_scene(
+        walls=BLOCKING[:4], pose_est=np.array([8.0, 6.0, np.pi]), fov=np.pi / 3, read_ids=np.array([], int)
+    )
+    shaded = pixels_to_world(r, scene.bounds, fov_pixels(r.render(scene)))
+    assert (shaded[:, 0] > 3.0).mean() > 0.99  # ahead of the true robot, facing +x
+    r.close()
+
+
+def test_legend_names_every_mark_in_its_own_band() -> None:
+    with_legend = Renderer("rgb_array", width=640, height=640)
+    without = Renderer("rgb_array", width=640, height=640, options={"legend": False})
+    scene = make_scene()
+    framed, plain = with_legend.render(scene), without.render(scene)
+    bottom_of_world = with_legend.world_to_pixels(scene.bounds, np.array([0.0, 0.0]))[1]
+    band = framed[int(bottom_of_world) + 4 :]
+    assert len(band) >= 2 * render.LEGEND_ROW
+    for colour in (render.TRUE_BODY, render.EST, render.LANDMARK_EST, render.FOV_FILL, render.TEXT):
+        assert (band == np.array(colour)).all(axis=-1).any(), colour
+    columns, font = with_legend._legend_columns, with_legend._legend_font()
+    for i, (_, label, _) in enumerate(
+        with_legend._legend_entries()
+    ):  # every label inside the frame, none overlapping
+        column = i % len(columns)
+        right = columns[column] + render.LEGEND_MARK + font.size(label)[0]
+        assert right <= (columns[column + 1] if column + 1 < len(columns) else 640 - render.PAD), label
+    labels = [label for _, label, _ in with_legend._legend_entries()]
+    assert {"true robot", "true landmark", "true path", "estimated path"} <= set(labels)
+    # without the legend the map takes the whole frame
+    assert without.world_to_pixels(scene.bounds, np.array([0.0, 0.0]))[1] > bottom_of_world
+    assert not np.array_equal(framed, plain)
+    with_legend.close()
+    without.close()
+
+
+def test_magnified_landmark_ellipses_are_larger_and_say_so(renderer: Renderer) -> None:
+    big = Renderer("rgb_array", width=W, height=H, options={"legend": False, "landmark_ellipse_scale": 4})
+    scene = make_scene(read_ids=np.array([], int))
+    assert blue_pixels(big.render(scene)).sum() > 2 * blue_pixels(renderer.render(scene)).sum()
+    assert any("\u00d74" in label for _, label, _ in big._legend_entries())
+    big.close()
+
+
+def test_render_options_reject_bad_values() -> None:
+    with pytest.raises(ValueError, match="landmark_ellipse_scale"):
+        render.RenderOptions(landmark_ellipse_scale=0.5)
+    with pytest.raises(ValueError, match=r"no field \['colour'\].*legend, landmark_ellipse_scale"):
+        render.RenderOptions.build({"colour": "red"})
+    with pytest.raises(ValueError, match="legend"):
+        Renderer("rgb_array", width=W, height=H)  # too small for the legend and a map
+
+
+def test_pose_ellipse_is_drawn_over_the_robots(renderer: Renderer) -> None:
+    """A 3-sigma pose ellipse of 1.5 m: its red line crosses the point 1.5 m to the estimate's side."""
+    scene = make_scene(pose_cov=np.diag([0.25, 0.25, 0.01]), read_ids=np.array([], int))
+    frame = renderer.render(scene)
+    edge = renderer.world_to_pixels(scene.bounds, scene.pose_est[:2] + np.array([1.5, 0.0]))
+    red = (frame[..., 0].astype(int) - frame[..., 1] > 120) & (frame[..., 2] < 100)
+    col, row = np.round(edge).astype(int)
+    assert red[row - 2 : row + 3, col - 2 : col + 3].any()
+
+
+def test_env_frames_shade_no_pixel_behind_a_wall() -> None:
+    """On the env's own frames (the corridor ring and the rooms, where walls are close on every side): the
+    shaded view never reaches past a wall, step after step; and the header counts env steps."""
+    import gymnasium as gym
+
+    import ekfslam_gym  # noqa: F401
+
+    for env_id in ("EKFSLAM-Loop-v0", "EKFSLAM-Large-v0"):
+        env = gym.make(env_id, render_mode="rgb_array", action={"kind": "primitives"})
+        env.reset(seed=3)
+        base = env.unwrapped
+        walls = np.asarray(base._world.layout.walls, dtype=float)
+        checked = 0
+        for step in range(6):
+            frame = env.render()
+            band = base._renderer._legend_band
+            assert band > 0  # the env draws its legend
+            shaded = pixels_to_world(base._renderer, base._bounds, fov_pixels(frame, band))
+            assert len(shaded) > 100
+            assert not crosses(base._world.pose[:2], shaded, walls).any(), (env_id, step)
+            checked += len(shaded)
+            env.step(step % 9)
+        scenes: list[Scene] = []
+        original = base._renderer.render
+        base._renderer.render = lambda scene, seen=scenes, draw=original: seen.append(scene) or draw(scene)
+        env.render()
+        assert scenes[0].text.startswith(
+            f"step 6/{base.config.max_episode_steps} "
+        )  # 6 env steps, 60 controls
+        assert base.elapsed_steps == 60
+        env.close()

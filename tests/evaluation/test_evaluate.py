@@ -132,7 +132,7 @@ def test_smoother_option_reports_the_smoothed_episode_beside_the_filter(capsys):
 
 
 def test_env_kwargs_go_on_top_of_the_training_record_section_by_section():
-    from ekfslam_gym.cli.common import merge_env_kwargs
+    from ekfslam_gym.evaluation.rollout import merge_env_kwargs
 
     trained = {"filter": {"motion_model": "odometry", "pose_prior": 1e-6}, "action": {"kind": "primitives"}}
     merged = merge_env_kwargs(trained, {"filter": {"variant": "fej"}, "max_episode_steps": 30})

@@ -52,6 +52,13 @@ def test_per_step_nees_bounds_are_the_chi2_quantiles():
     assert lo < lo50 < 3.0 < hi50 < hi
 
 
+def test_the_written_out_step_bounds_are_the_computed_ones():
+    """episode_metrics writes the per-step bounds out (no scipy.stats at import): exactly the computed ones."""
+    from ekfslam_gym.evaluation.episode_metrics import NEES_STEP_BOUNDS, POSE_DIM
+
+    assert NEES_STEP_BOUNDS == metrics.nees_bounds(POSE_DIM, 1)
+
+
 @pytest.fixture
 def gaussian_case():
     rng = np.random.default_rng(42)

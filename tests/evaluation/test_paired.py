@@ -1,5 +1,5 @@
 """The paired comparison of two groups of models on the same seeds (``ekfslam_gym.evaluation.paired``) and its
-command line (``python -m ekfslam_gym.compare``)."""
+command line (``ekfslam-compare``)."""
 
 from __future__ import annotations
 

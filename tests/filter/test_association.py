@@ -288,16 +288,53 @@ def _drive(env, steps, seed=0):
     return info
 
 
-def test_env_with_jcbc_and_clutter_passes_the_checker_and_counts():
+def _recount(steps):
+    """False and missed associations recounted from each step's association (true ids, slots, new, forgotten),
+    with the env's rules (``ekfslam_gym.envs.association_truth``), from a fresh ``slot_truth``."""
+    slot_truth, false, missed = None, 0, 0
+    for truth, slots, new, forgotten, before in steps:
+        slot_truth = before.copy() if slot_truth is None else slot_truth
+        slot_truth[forgotten] = -1
+        for t, s, started in zip(truth, slots, new):
+            if s < 0:
+                missed += t >= 0
+            elif started:
+                slot_truth[s] = t
+            else:
+                false += t < 0 or slot_truth[s] != t
+                if t >= 0 and slot_truth[s] < 0:
+                    slot_truth[s] = t
+    return false, missed
+
+
+@pytest.mark.parametrize(("association", "clutter_rate"), [("jcbc", 0.5), ("nearest", 2.0)])
+def test_env_with_unknown_association_and_clutter_passes_the_checker_and_counts(
+    monkeypatch, association, clutter_rate
+):
+    """The env's counts are the sums of what every step's association did (recounted here from the readings'
+    true ids and the filter's slots); dense clutter under nearest neighbour makes false associations."""
+    steps = []
+    tally = compiled.tally_associations
+
+    def spy(truth, z, slots, new, forgotten, observed, slot_truth, *rest):
+        steps.append((truth.copy(), slots.copy(), new.copy(), forgotten.copy(), slot_truth.copy()))
+        return tally(truth, z, slots, new, forgotten, observed, slot_truth, *rest)
+
     env = gym.make(
-        "EKFSLAM-v0", filter={"association": "jcbc"}, sensor={"clutter_rate": 0.5, "detection_prob": 0.9}
+        "EKFSLAM-v0",
+        filter={"association": association},
+        sensor={"clutter_rate": clutter_rate, "detection_prob": 0.9},
     )
     check_env(env.unwrapped, skip_render_check=True)
+    monkeypatch.setattr(compiled, "tally_associations", spy)
     _, info = env.reset(seed=3)
     assert info["false_associations"] == 0 and info["missed_associations"] == 0
     info = _drive(env, 150)
     u = env.unwrapped
-    assert info["false_associations"] >= 0 and info["missed_associations"] >= 0
+    assert len(steps) == 151  # the reset's readings and every step's
+    assert (info["false_associations"], info["missed_associations"]) == _recount(steps)
+    if association == "nearest":
+        assert info["false_associations"] > 0
     truth = u.slot_truth
     held = u.filter.observed & (truth >= 0)
     assert held.any()

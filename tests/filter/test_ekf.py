@@ -8,7 +8,6 @@ from scipy import stats
 
 from ekfslam_gym.filter import COURSE_SETTINGS, EKFSLAM, FilterDivergedError, range_bearing, wrap_angle
 from ekfslam_gym.filter.models import odometry_motion, velocity_motion
-
 from tests.drives import loop_drive, ring_landmarks
 
 CONTROL_COV = np.diag([2e-4, 1e-3, 2e-4])

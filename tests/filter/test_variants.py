@@ -9,8 +9,8 @@ import pytest
 
 from ekfslam_gym.filter import EKFSLAM, range_bearing, wrap_angle
 from ekfslam_gym.filter.models import odometry_motion, wheel_motion
-
 from tests.drives import loop_drive, ring_landmarks
+
 from .test_ekf import CONTROL_COV, MEASUREMENT_COV, check_bookkeeping, make_filter
 
 VARIANTS = ("ekf", "fej", "iekf")

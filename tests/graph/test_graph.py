@@ -389,9 +389,12 @@ def test_cli_text_and_plot(small_g2o, tmp_path, capsys):
 def test_cli_errors(tmp_path, capsys):
     bad = tmp_path / "graph.csv"
     bad.write_text("")
-    assert graph_cli([str(bad)]) == 1
-    assert "unknown graph format" in capsys.readouterr().err
-    assert graph_cli([str(tmp_path / "missing.g2o")]) == 1
+    for path, message in ((bad, "unknown graph format"), (tmp_path / "missing.g2o", "missing.g2o")):
+        with pytest.raises(SystemExit) as exit_:
+            graph_cli([str(path)])
+        assert exit_.value.code == 2
+        err = capsys.readouterr().err
+        assert err.startswith("ekfslam-graph: error: ") and message in err and "Errno" not in err
 
 
 def test_python_dash_m_entry_point(small_g2o):

@@ -10,8 +10,9 @@ import pytest
 from ekfslam_gym.sim import LAYOUTS, Layout, make_layout, place_landmarks
 from ekfslam_gym.sim.geometry import min_wall_distance
 
-# the generators that draw their landmarks; ``surveyed`` is given them (tested at the end)
-NAMES = sorted(set(LAYOUTS) - {"surveyed"})
+# the generators that draw their landmarks; ``surveyed`` is given them (tested at the end), ``map_server`` reads
+# a map file (tests/test_sim_map_server.py)
+NAMES = sorted(set(LAYOUTS) - {"surveyed", "map_server"})
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -118,7 +119,7 @@ def test_bad_layout_arguments_raise(kwargs: dict) -> None:
 
 def test_unknown_layout_and_bad_rng() -> None:
     with pytest.raises(ValueError, match="unknown layout"):
-        make_layout("maze", np.random.default_rng(0), 5)
+        make_layout("castle", np.random.default_rng(0), 5)
     with pytest.raises(TypeError):
         make_layout("arena", 0, 5)  # type: ignore[arg-type]
 

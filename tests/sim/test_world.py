@@ -51,7 +51,7 @@ def test_same_seed_gives_bit_identical_rollouts() -> None:
 
 def test_rollouts_are_bit_identical_across_processes() -> None:
     code = (
-        "import hashlib, sys; sys.path.insert(0, 'tests'); from test_sim import _rollout; "
+        "import hashlib, sys; from tests.sim.test_world import _rollout; "
         "print(hashlib.sha256(b''.join(_rollout(3, 200, 'loop'))).hexdigest())"
     )
     child = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -191,6 +191,28 @@ def test_planner_kwargs_reach_the_demonstrator_and_are_recorded(monkeypatch):
     assert collect("EKFSLAM-v0", [30000], PRIMITIVE_KWARGS).meta["planner_kwargs"] == {}
 
 
+def test_reweighting_is_the_envs_own_weighted_sum_of_each_pairs_terms():
+    """Pair by pair, the re-weighted reward is exactly ``rewards.weigh`` of the pair's terms, the sum the env
+    takes; a weight of 0 drops its term whatever it holds."""
+    from ekfslam_gym.envs.config import RewardConfig
+    from ekfslam_gym.envs.rewards import nonzero_weights, weigh
+
+    rng = np.random.default_rng(5)
+    terms = {name: rng.normal(size=6) for name in REWARD_NAMES}
+    terms["step_cost"] = np.full(6, -1.0)
+    recorded = {name: 1.0 for name in REWARD_NAMES}
+    demos = Demonstrations(np.zeros((6, 1)), np.zeros(6, dtype=np.int64), np.zeros(6), np.zeros(6, dtype=np.int64),
+                           np.array([30000]), {"reward_weights": recorded, "reward_terms": "unweighted"}, terms)  # fmt: skip
+    weights = {"info_gain": 0.5, "collision": 3.0, "step_cost": 0.0, "coverage": 0.25, "pose_variance": 8.0}
+    again = demo_mod.reweighted(demos, weights)
+    pairs = nonzero_weights(RewardConfig(**weights))
+    assert [name for name, _ in pairs] == ["info_gain", "collision", "coverage", "pose_variance"]
+    expected = [weigh({name: float(v[i]) for name, v in terms.items()}, pairs) for i in range(6)]
+    assert again.rewards.tolist() == expected  # bit for bit
+    with pytest.raises(ValueError, match="reward.collision"):
+        demo_mod.reweighted(demos, {**weights, "collision": float("nan")})
+
+
 def test_discounted_returns_known_answers():
     demos = Demonstrations(np.zeros((5, 1)), np.zeros(5, dtype=np.int64), np.array([1.0, 2.0, 3.0, 4.0, 5.0]),
                            np.array([0, 0, 0, 1, 1]), np.array([0, 1]))  # fmt: skip
@@ -456,14 +478,14 @@ def test_train_settings_switch_is_checked_and_absent_means_none(tmp_path):
         )
     bad = tmp_path / "bad.yaml"
     bad.write_text("EKFSLAM-v0: {n_steps: 64}\ntrain_settings: {EKFSLAM-v0: {pretrain: {epoch: 3}}}\n")
-    with pytest.raises(SystemExit, match="unknown pretrain keys"):
+    with pytest.raises(settings.SettingsError, match="unknown pretrain keys"):
         settings.load_entry(bad, "EKFSLAM-v0")
     bad.write_text("EKFSLAM-v0: {n_steps: 64, pretrain: {epochs: 3}}\n")
-    with pytest.raises(SystemExit, match="train_settings"):
+    with pytest.raises(settings.SettingsError, match="train_settings"):
         settings.load_entry(bad, "EKFSLAM-v0")
 
 
-def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
+def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path, capsys):
     import train
 
     out = tmp_path / "run"
@@ -497,8 +519,9 @@ def test_bc_warm_start_trains_end_to_end_and_is_skipped_on_resume(tmp_path):
     assert not (tmp_path / "reuse" / "demonstrations.npz").exists()
     assert demo_mod.load(tmp_path / "reuse" / "dagger.npz").seeds.tolist() == [30000, 30001, 30200]
     mismatch = [*reuse[:-1], "env_kwargs={action: {kind: primitives, hold: 5}, max_episode_steps: 8}"]
-    with pytest.raises(ValueError, match="env_kwargs"):
+    with pytest.raises(SystemExit) as exit_:  # a pretrain.path that does not fit the run: a usage error
         train.main(mismatch)
+    assert exit_.value.code == 2 and "pretrain.path" in capsys.readouterr().err
     # Another reward reuses them, its rewards recomputed; one needing a term they lack is refused.
     kinds = "action: {kind: primitives, hold: 10}, max_episode_steps: 8"
     rewarded = [

@@ -75,6 +75,30 @@ def test_bad_command_lines_fail_clearly(tmp_path, capsys):
         train.main(["--hyperparams", "n_steps"])
 
 
+def test_the_library_raises_settings_errors_and_the_command_line_exits_2(tmp_path, capsys):
+    """The library never ends the process: a bad config file, entry or override is a ``SettingsError`` (a
+    ``ValueError``) naming it, and the command line turns it into its usage error."""
+    config = tmp_path / "c.yaml"
+    for text, message in (("[1, 2]", "must map env ids"), ("EKFSLAM-v0: 3", "must be mappings"),
+                          ("EKFSLAM-v0: {n_steps: [", "not valid YAML"),
+                          ("EKFSLAM-Loop-v0: {n_steps: 64}", "has no entry for 'EKFSLAM-v0'")):  # fmt: skip
+        config.write_text(text)
+        with pytest.raises(settings.SettingsError, match=message) as raised:
+            settings.load_entry(config, "EKFSLAM-v0")
+        assert str(config) in str(raised.value) and isinstance(raised.value, ValueError)
+        with pytest.raises(SystemExit) as exit_:
+            train.main(["--config", str(config), "--out", str(tmp_path / "run")])
+        assert exit_.value.code == 2 and message in capsys.readouterr().err
+    with pytest.raises(settings.SettingsError, match="KEY=VALUE"):
+        settings.parse_hyperparams(["n_steps"])
+    (tmp_path / "half").mkdir()
+    (tmp_path / "half" / "config.yaml").write_text("env_id: EKFSLAM-v0\nentry: {}\n")
+    with pytest.raises(SystemExit) as exit_:
+        train.main(["--resume", str(tmp_path / "half")])
+    assert exit_.value.code == 2 and "no seed" in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()
+
+
 SMALL = ["n_steps=32", "batch_size=32", "n_epochs=1", "n_envs=1", "eval_episodes=1", "checkpoint_freq=0",
         "env_kwargs={max_episode_steps: 20}"]  # fmt: skip
 
@@ -152,10 +176,10 @@ def test_config_keeps_train_settings_out_of_the_ppo_entry(tmp_path):
     assert entry["vec_env"] == "dummy" and entry["eval_seed"] == 20_000  # merged from train_settings
     bad = tmp_path / "bad.yaml"
     bad.write_text("EKFSLAM-v0: {n_steps: 64, vec_env: dummy}\n")
-    with pytest.raises(SystemExit, match="train_settings"):
+    with pytest.raises(settings.SettingsError, match="train_settings"):
         settings.load_entry(bad, "EKFSLAM-v0")
     bad.write_text("EKFSLAM-v0: {n_steps: 64}\ntrain_settings: {EKFSLAM-v0: {n_stepz: 1}}\n")
-    with pytest.raises(SystemExit, match="unknown"):
+    with pytest.raises(settings.SettingsError, match="unknown"):
         settings.load_entry(bad, "EKFSLAM-v0")
 
 
@@ -278,7 +302,7 @@ def test_algo_settings_are_checked_and_dotted_classes_resolved(tmp_path):
 
     config = tmp_path / "c.yaml"
     config.write_text("EKFSLAM-v0: {n_steps: 64}\ntrain_settings: {EKFSLAM-v0: {algo: a2c}}\n")
-    with pytest.raises(SystemExit, match="algo must be one of"):
+    with pytest.raises(settings.SettingsError, match="algo must be one of"):
         settings.load_entry(config, "EKFSLAM-v0")
     assert settings.load_entry(Path("configs/ppo.yaml"), "EKFSLAM-v0")["algo"] == "ppo"
     assert settings.load_entry(Path("configs/ppo_lstm.yaml"), "EKFSLAM-Large-v0")["algo"] == "ppo_lstm"
