@@ -1,8 +1,8 @@
 """The import contract: no import cycle anywhere in ``ekfslam_gym`` (the repository's ``agents/`` folder included,
 installed as ``ekfslam_gym.agents``), and layers that import only the layers below them, lowest first:
 
-    angles | compiled | ellipses | seeds | packaged | artefacts (the shipped files, found by importlib.resources;
-        the names of a training run's files and its record's parser)
+    angles | compiled | kernel_types | ellipses | seeds | packaged | artefacts (the shipped files, found by
+        importlib.resources; the names of a training run's files and its record's parser)
     sim | filter | graph
     envs | data
     evaluation
