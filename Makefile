@@ -31,6 +31,8 @@ AOT_STAMP := $(VENV)/.aot-kernels
 $(AOT_STAMP): $(STAMP) $(KERNEL_SOURCES)
 	$(BIN)/python -W ignore -c "from ekfslam_gym import compiled; raise SystemExit(compiled.backend() != 'aot')" \
 		|| $(BIN)/python setup.py -q build_ext --inplace 2>&1 | grep -v -i "deprecat\|^ \|^!!\|^$$" || true
+	@if [ -n "$$EKFSLAM_GYM_REQUIRE_AOT" ]; then $(BIN)/python -W ignore -c "from ekfslam_gym import compiled; \
+		raise SystemExit(compiled.backend() != 'aot' and 'the ahead-of-time kernels are not built (EKFSLAM_GYM_REQUIRE_AOT=1)')"; fi
 	touch $@
 
 install: $(STAMP) $(AOT_STAMP)
