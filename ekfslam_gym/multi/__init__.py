@@ -8,4 +8,12 @@ docstring describes the env; ``TeamEnvConfig`` its configuration.
 from .config import TeamConfig, TeamEnvConfig, build_team_config
 from .env import TeamSLAMEnv, env, parallel_env, raw_env
 
-__all__ = ["TeamConfig", "TeamEnvConfig", "TeamSLAMEnv", "build_team_config", "env", "parallel_env", "raw_env"]
+__all__ = [
+    "TeamConfig",
+    "TeamEnvConfig",
+    "TeamSLAMEnv",
+    "build_team_config",
+    "env",
+    "parallel_env",
+    "raw_env",
+]

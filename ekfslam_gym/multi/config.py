@@ -104,7 +104,9 @@ def build_team_config(
     elif config is None:
         built = TeamEnvConfig.from_overrides(**overrides)
     else:
-        raise TypeError(f"config must be a TeamEnvConfig, a YAML path or a mapping, got {type(config).__name__}")
+        raise TypeError(
+            f"config must be a TeamEnvConfig, a YAML path or a mapping, got {type(config).__name__}"
+        )
     if n_robots is not None:
         built = TeamEnvConfig.from_overrides(built, team={"n_robots": n_robots})
     return built

@@ -196,7 +196,9 @@ class TeamSLAMEnv(ParallelEnv):
         missing = [a for a in self.agents if a not in actions]
         unknown = [a for a in actions if a not in self._index]
         if missing or unknown:
-            raise ValueError(f"actions must name every live agent {self.agents}; missing {missing}, unknown {unknown}")
+            raise ValueError(
+                f"actions must name every live agent {self.agents}; missing {missing}, unknown {unknown}"
+            )
         n = self.n_robots
         for i, agent in enumerate(self.possible_agents):
             self._interfaces[i].begin(actions[agent], self._mean[3 * i : 3 * i + 3])
@@ -453,7 +455,9 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     return view
 
 
-def parallel_env(n_robots: int = 3, config=None, render_mode: str | None = None, **overrides: Any) -> TeamSLAMEnv:
+def parallel_env(
+    n_robots: int = 3, config=None, render_mode: str | None = None, **overrides: Any
+) -> TeamSLAMEnv:
     """The team env as a PettingZoo ``ParallelEnv`` (``TeamSLAMEnv``'s docstring)."""
     return TeamSLAMEnv(n_robots, config, render_mode, **overrides)
 

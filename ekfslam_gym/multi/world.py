@@ -75,7 +75,9 @@ def segment_blocked(start: np.ndarray, ends: np.ndarray, centres: np.ndarray, ra
     return np.any((gap2 < radius * radius) & ~at_end, axis=0)
 
 
-def ray_disc_distances(pose: tuple[float, float, float], angles: np.ndarray, centres: np.ndarray, radius: float):
+def ray_disc_distances(
+    pose: tuple[float, float, float], angles: np.ndarray, centres: np.ndarray, radius: float
+):
     """Distance (m) along each beam (heading + ``angles``) from the pose's position to the first point of any
     disc of ``radius`` at ``centres`` (k, 2); inf where a beam misses them all."""
     out = np.full(angles.shape[0], np.inf)
