@@ -55,7 +55,7 @@ def test_info_gain_is_the_joint_log_det_drop(n_robots):
     while team.agents:
         _, rewards, _, _, infos = team.step(random_actions(team, rng))
         after = infos["robot_0"]["log_det"]
-        for agent, info in infos.items():
+        for info in infos.values():
             assert info["log_det"] == after
             assert list(info["reward_terms"]) == list(REWARD_NAMES)
             assert info["reward_terms"]["info_gain"] == pytest.approx(log_det - after, abs=1e-9)

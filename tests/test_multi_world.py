@@ -79,15 +79,19 @@ def test_robots_read_each_other_in_view_and_not_through_a_third():
     assert line.read_robots(0, np.random.default_rng(0)).targets.tolist() == [1]
 
 
-def test_robots_collide_and_do_not_overlap():
+def test_robots_collide_and_do_not_pass_through_each_other():
+    """Head-on at full speed the discs meet within one substep's closing travel (2 v_max dt / substeps = 0.1 m,
+    pymunk detects contact after integrating), never pass through, and are pushed back to touching."""
     team = world([(5.0, 5.0, 0.0), (6.0, 5.0, math.pi)])
     touched = np.zeros(2, dtype=bool)
+    diameter = 2 * RobotParams().radius
     for _ in range(20):
         team.step([(1.0, 0.0), (1.0, 0.0)])
         touched |= team.robot_collided
-        gap = np.hypot(*(team.positions()[0] - team.positions()[1]))
-        assert gap > 2 * RobotParams().radius - 0.01
+        (x0, _), (x1, _) = team.positions()
+        assert x1 - x0 > diameter - 0.1 - 1e-9
     assert touched.all()
+    assert x1 - x0 == pytest.approx(diameter, abs=0.005)
     assert not team.wall_collided.any()
 
 
