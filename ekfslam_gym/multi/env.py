@@ -15,7 +15,6 @@ from pettingzoo.utils import wrappers
 from pettingzoo.utils.conversions import parallel_to_aec
 
 from .. import compiled
-from ..angles import wrap_angle
 from ..envs.actions import make_interface
 from ..envs.observation import ObservationLayout, make_memory, observation_constants
 from ..envs.rewards import REWARD_NAMES, nonzero_weights, weigh
@@ -23,6 +22,7 @@ from ..filter.ekf import FilterDivergedError
 from ..filter.team import TeamEKF
 from ..sim.layouts import make_layout
 from ..sim.odometry import WheelOdometryNoise
+from . import kernels
 from .config import TeamEnvConfig, build_team_config
 from .observation import fill_teammates, team_observation_space
 from .rewards import ROBOT_TERMS, robot_terms, team_terms
@@ -311,13 +311,7 @@ class TeamSLAMEnv(ParallelEnv):
 
     def _worst_landmark_variance(self) -> float:
         """The largest eigenvalue of any landmark's 2 x 2 marginal covariance, m^2."""
-        k = 3 * self.n_robots
-        diagonal = np.diagonal(self._cov)[k:]
-        a, c = diagonal[0::2], diagonal[1::2]
-        b = np.diagonal(self._cov, offset=1)[k::2]
-        if a.size == 0:
-            return 0.0
-        return float(np.max(0.5 * (a + c) + np.sqrt((0.5 * (a - c)) ** 2 + b * b)))
+        return kernels.worst_landmark_variance(self._cov, 3 * self.n_robots)
 
     def _is_terminated(self, collided: np.ndarray) -> bool:
         if self.config.terminate_on_collision and collided.any():
@@ -367,12 +361,7 @@ class TeamSLAMEnv(ParallelEnv):
             pose = mean[3 * i : 3 * i + 3].copy()
             pose_cov = cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3].copy()
             true_pose = self._world.pose(i)
-            error = true_pose - pose
-            error[2] = wrap_angle(error[2])
-            try:
-                nees = float(error @ np.linalg.solve(pose_cov, error))
-            except np.linalg.LinAlgError:
-                nees = math.nan
+            nees = kernels.pose_nees(true_pose, mean, cov, 3 * i)
             info = {
                 "step": self._t,
                 "true_pose": true_pose,

@@ -20,13 +20,12 @@ Every entry is clipped to [-CLIP, CLIP], as the single-robot observation's.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from gymnasium import spaces
 
 from ..envs.observation import ObservationLayout
 from ..envs.observation_codes import CLIP
+from . import kernels
 
 TEAMMATE_FEATURES = 6
 
@@ -42,28 +41,4 @@ def fill_teammates(
 ) -> None:
     """Write robot ``robot``'s teammate slots into ``out`` (TEAMMATE_FEATURES per slot, zeros beyond the
     teammates) from the joint belief (mean, cov), robots' poses at 3r..3r+2."""
-    out[:] = 0.0
-    slots = out.shape[0] // TEAMMATE_FEATURES
-    if slots == 0 or n_robots == 1:
-        return
-    i = 3 * robot
-    x, y, theta = mean[i], mean[i + 1], mean[i + 2]
-    others = [r for r in range(n_robots) if r != robot]
-    offsets = np.array([[mean[3 * r] - x, mean[3 * r + 1] - y] for r in others])
-    order = np.argsort(np.hypot(offsets[:, 0], offsets[:, 1]), kind="stable")[:slots]
-    c, s = math.cos(theta), math.sin(theta)
-    for slot, k in enumerate(order):
-        j = 3 * others[k]
-        dx, dy = offsets[k]
-        relative = cov[j : j + 2, j : j + 2] + cov[i : i + 2, i : i + 2] - cov[j : j + 2, i : i + 2]
-        relative = relative - cov[i : i + 2, j : j + 2]
-        half_trace = 0.5 * (relative[0, 0] + relative[1, 1])
-        turn = mean[j + 2] - theta
-        o = TEAMMATE_FEATURES * slot
-        out[o] = 1.0
-        out[o + 1] = (c * dx + s * dy) / half_size
-        out[o + 2] = (-s * dx + c * dy) / half_size
-        out[o + 3] = math.sin(turn)
-        out[o + 4] = math.cos(turn)
-        out[o + 5] = math.log(max(half_trace, 1e-300)) / 10.0
-    np.clip(out, -CLIP, CLIP, out=out)
+    kernels.fill_teammates(out, robot, mean, cov, n_robots, half_size, CLIP, TEAMMATE_FEATURES)

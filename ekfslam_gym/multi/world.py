@@ -38,6 +38,7 @@ from ..sim.odometry import (
 from ..sim.robot import WALL_CATEGORY, WALL_COLLISION_TYPE, DiffDriveRobot, RobotParams
 from ..sim.sensor import RangeBearingSensor, Readings, SensorParams
 from ..sim.world import COLLISION_SLOP
+from . import kernels
 
 FIRST_ROBOT_COLLISION_TYPE = 10  # robot i's shape has collision type 10 + i, so contacts are told apart
 
@@ -63,16 +64,9 @@ def _count_pair(arbiter: pymunk.Arbiter, space: pymunk.Space, counters: tuple[li
 def segment_blocked(start: np.ndarray, ends: np.ndarray, centres: np.ndarray, radius: float) -> np.ndarray:
     """Whether the segment from ``start`` (2,) to each of ``ends`` (m, 2) passes within ``radius`` m of any of
     ``centres`` (k, 2) (bool (m,)); a centre at an end does not count (the segment ends at it)."""
-    if ends.shape[0] == 0 or centres.shape[0] == 0:
-        return np.zeros(ends.shape[0], dtype=bool)
-    d = ends - start  # (m, 2)
-    length2 = np.maximum(np.einsum("ij,ij->i", d, d), 1e-12)
-    f = centres - start  # (k, 2)
-    t = np.clip((f @ d.T) / length2, 0.0, 1.0)  # (k, m) the nearest point's fraction along each segment
-    nearest = start + t[..., None] * d  # (k, m, 2)
-    gap2 = np.sum((nearest - centres[:, None, :]) ** 2, axis=-1)
-    at_end = np.sum((ends[None, :, :] - centres[:, None, :]) ** 2, axis=-1) < 1e-12
-    return np.any((gap2 < radius * radius) & ~at_end, axis=0)
+    ends = np.ascontiguousarray(ends, dtype=np.float64).reshape(-1, 2)
+    centres = np.ascontiguousarray(centres, dtype=np.float64).reshape(-1, 2)
+    return kernels.segments_blocked(float(start[0]), float(start[1]), ends, centres, float(radius))
 
 
 def ray_disc_distances(
@@ -81,20 +75,9 @@ def ray_disc_distances(
     """Distance (m) along each beam (heading + ``angles``) from the pose's position to the first point of any
     disc of ``radius`` at ``centres`` (k, 2); inf where a beam misses them all."""
     out = np.full(angles.shape[0], np.inf)
-    if centres.shape[0] == 0:
-        return out
-    directions = pose[2] + angles
-    dx, dy = np.cos(directions), np.sin(directions)
-    fx = pose[0] - centres[:, 0]
-    fy = pose[1] - centres[:, 1]
-    b = fx[:, None] * dx + fy[:, None] * dy  # (k, B)
-    c = (fx * fx + fy * fy - radius * radius)[:, None]
-    disc = b * b - c
-    s = -b - np.sqrt(np.maximum(disc, 0.0))
-    hit = (disc >= 0.0) & (s >= 0.0)
-    s = np.where(hit, s, np.inf)
-    s = np.where(c <= 0.0, 0.0, s)  # inside a disc
-    return np.minimum(out, s.min(axis=0))
+    centres = np.ascontiguousarray(centres, dtype=np.float64).reshape(-1, 2)
+    kernels.stop_beams_at_discs(pose[0], pose[1], pose[2], angles, centres, float(radius), out)
+    return out
 
 
 class TeamWorld:
@@ -248,7 +231,8 @@ class TeamWorld:
 
     # --- sensing -------------------------------------------------------------------------------------------
     def _others(self, i: int) -> np.ndarray:
-        return np.array([p[:2] for j, p in enumerate(self._poses) if j != i]).reshape(-1, 2)
+        """The other robots' true positions (N - 1, 2)."""
+        return np.array([p[:2] for j, p in enumerate(self._poses) if j != i], dtype=np.float64).reshape(-1, 2)
 
     def sense(self, i: int, rng: np.random.Generator) -> Readings:
         """Robot i's noisy landmark readings (ids ordered, (range, bearing)), the landmarks hidden by a wall or
@@ -256,8 +240,8 @@ class TeamWorld:
         pose = self._poses[i]
         ids, z = self.sensor.true_readings(pose)
         if self.n_robots > 1 and ids.shape[0]:
-            visible = ~segment_blocked(
-                np.array(pose[:2]), self.layout.landmarks[ids], self._others(i), self.robot_params.radius
+            visible = ~kernels.segments_blocked(
+                pose[0], pose[1], self.layout.landmarks[ids], self._others(i), self.robot_params.radius
             )
             ids, z = ids[visible], z[visible]
         p = self.sensor_params
@@ -304,10 +288,15 @@ class TeamWorld:
         pose = self._poses[i]
         out = self.sensor.scan(pose)
         if self.n_robots > 1:
-            np.minimum(
-                out, ray_disc_distances(pose, self.sensor.beam_angles, self._others(i), self.robot_params.radius),
-                out=out,
-            )  # fmt: skip
+            kernels.stop_beams_at_discs(
+                pose[0],
+                pose[1],
+                pose[2],
+                self.sensor.beam_angles,
+                self._others(i),
+                self.robot_params.radius,
+                out,
+            )
         return out
 
 
