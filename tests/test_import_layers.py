@@ -6,7 +6,7 @@ installed as ``ekfslam_gym.agents``), and layers that import only the layers bel
     envs | data
     evaluation
     agents
-    training (itself ordered: settings, demonstrations, artefacts, cloning, keep_cloning, pretraining, run, sweep)
+    training (itself ordered: settings, demonstrations, artefacts, cloning, keep_cloning, pretraining, run, sweep) | multi
     benchmark | pretrained (the protocol; the shipped policies with their envs)
     cli (the command lines and their ``python -m`` entry points)
 
@@ -31,7 +31,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("envs", "data"),
     ("evaluation",),
     ("agents",),
-    ("training",),
+    ("training", "multi"),
     ("benchmark", "pretrained"),
     ("cli",),
 )
