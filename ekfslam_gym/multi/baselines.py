@@ -169,6 +169,29 @@ class AssignedFrontierPlanner(FrontierPrimitivesPlanner):
         return super()._needs_plan(pose)
 
 
+def utility_cost_assignment(costs: np.ndarray, targets: np.ndarray, beta: float, reach: float) -> list[int]:
+    """Burgard et al. (2005)'s greedy assignment: ``costs`` (robots, targets) the path costs (m, inf where
+    unreachable), ``targets`` (k, 2) their positions (m). Every target starts with utility 1; while a robot is
+    left, the (robot, target) pair of largest utility - ``beta`` cost is chosen, and every target within
+    ``reach`` m of the chosen one loses 1 - distance / reach of its utility. Returns each robot's target index
+    (-1: none reachable)."""
+    n = costs.shape[0]
+    utility = np.ones(costs.shape[1])
+    chosen = [-1] * n
+    free = list(range(n))
+    while free and costs.shape[1]:
+        value = utility[None, :] - beta * costs[free]
+        best = np.unravel_index(int(np.argmax(value)), value.shape)
+        if not np.isfinite(value[best]):
+            break
+        robot, t = free[best[0]], int(best[1])
+        chosen[robot] = t
+        free.remove(robot)
+        d = np.hypot(targets[:, 0] - targets[t, 0], targets[:, 1] - targets[t, 1])
+        utility -= np.where(d < reach, 1.0 - d / reach, 0.0)
+    return chosen
+
+
 class CoordinatedFrontierTeam(IndependentFrontierTeam):
     """Burgard et al. (2005)'s coordinated frontier assignment (the module docstring).
 
@@ -215,20 +238,8 @@ class CoordinatedFrontierTeam(IndependentFrontierTeam):
             dist, _ = grid_paths(planner._wall, sources, cell)
             turn = np.abs((np.arctan2(centres[:, 1] - pose[1], centres[:, 0] - pose[0]) - pose[2] + np.pi) % (2 * np.pi) - np.pi)  # fmt: skip
             costs[i] = dist[rows, cols] + planner.turn_cost * turn
-        utility = np.ones(rows.size)
-        targets: list[tuple[int, int] | None] = [None] * n
-        free = list(range(n))
-        while free:
-            value = utility[None, :] - self.beta * costs[free]
-            best = np.unravel_index(int(np.argmax(value)), value.shape)
-            if not np.isfinite(value[best]):
-                break
-            robot, t = free[best[0]], int(best[1])
-            targets[robot] = (int(rows[t]), int(cols[t]))
-            free.remove(robot)
-            d = np.hypot(centres[:, 0] - centres[t, 0], centres[:, 1] - centres[t, 1])
-            utility -= np.where(d < self._reach, 1.0 - d / self._reach, 0.0)
-        return targets
+        chosen = utility_cost_assignment(costs, centres, self.beta, self._reach)
+        return [None if t < 0 else (int(rows[t]), int(cols[t])) for t in chosen]
 
     def act(self, observations: Mapping[str, np.ndarray]) -> dict[str, int]:
         for planner, target in zip(self.planners, self.assign(observations)):
