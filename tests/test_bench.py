@@ -19,6 +19,7 @@ EXPECTED = {
     "sim.py": "step = physics",
     "graph.py": "bearing-range",
     "startup.py": "ratio EKFSLAM-v0 / CartPole-v1",
+    "team.py": "robot-step cost",
     "train.py": "env steps/s",
 }
 
