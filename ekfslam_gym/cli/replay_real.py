@@ -61,6 +61,11 @@ def add_real_data_arguments(parser: argparse.ArgumentParser) -> None:
         help="MRCLAM: also give the filter the readings of the other robots' barcodes (moving objects)",
     )
     parser.add_argument(
+        "--team",
+        action="store_true",
+        help="MRCLAM: all five robots in one joint filter (robot-to-robot readings fused), beside each alone",
+    )
+    parser.add_argument(
         "--noise",
         choices=NOISES,
         default=None,
@@ -79,6 +84,7 @@ def resolve_dataset(parser: argparse.ArgumentParser, args: argparse.Namespace) -
         "--variant": args.variant is not None,
         "--association": args.association is not None,
         "--robots": args.robots,
+        "--team": args.team,
         "--noise": args.noise is not None,
         "--smoother": args.smoother,
     }
@@ -103,11 +109,15 @@ def resolve_dataset(parser: argparse.ArgumentParser, args: argparse.Namespace) -
         parser.error(f"{', '.join(used)} do not apply to --dataset {dataset}")
     if dataset == "gtsam":
         used = [name for name, given in (("--association", args.association), ("--robots", args.robots),
-                                         ("--noise", args.noise)) if given]  # fmt: skip
+                                         ("--team", args.team), ("--noise", args.noise)) if given]  # fmt: skip
         if used:
             parser.error(
                 f"{', '.join(used)} apply to --dataset mrclam only (GTSAM files give identities and noise)"
             )
+    if args.team and (args.robots or args.smoother or args.association not in (None, "known")):
+        parser.error(
+            "--team reads the barcodes of landmarks and robots: no --robots, --smoother or --association"
+        )
     if args.smoother and args.association not in (None, "known"):
         parser.error("--smoother uses the barcodes: it needs --association known")
     if args.plot is not None and args.plot.suffix.lower() != ".png":
@@ -135,6 +145,10 @@ def replay_real_data(parser: argparse.ArgumentParser, args: argparse.Namespace) 
     """Replay a real data set and print the report (or one JSON object with ``--json``)."""
     if args.dataset == "gtsam":
         return _replay_gtsam(parser, args)
+    if args.team:
+        from .replay_team import replay_team_data
+
+        return replay_team_data(parser, args)
     return _replay_mrclam(parser, args)
 
 
