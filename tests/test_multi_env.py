@@ -152,3 +152,18 @@ def test_errors_name_the_field():
     team.reset(seed=0)
     with pytest.raises(ValueError, match="missing"):
         team.step({"robot_0": 0})
+
+
+def test_registered_with_pettingzoo():
+    import pettingzoo
+
+    from ekfslam_gym.multi import ENV_ID
+
+    team = pettingzoo.make("parallel", ENV_ID, n_robots=2, max_episode_steps=3)
+    assert team.possible_agents == ["robot_0", "robot_1"]
+    observations, _ = team.reset(seed=0)
+    reference, _ = parallel_env(n_robots=2, max_episode_steps=3).reset(seed=0)
+    np.testing.assert_array_equal(observations["robot_1"], reference["robot_1"])
+    aec = pettingzoo.make("aec", ENV_ID, n_robots=2)
+    aec.reset(seed=0)
+    assert aec.agent_selection == "robot_0"

@@ -88,8 +88,9 @@ class TeamSLAMEnv(ParallelEnv):
     association only. A bad value raises ``ValueError`` naming the field. No render mode yet.
 
     ## Registered Configurations
-    None with Gymnasium (a PettingZoo env is made by its module's functions): ``ekfslam_gym.multi.parallel_env``,
-    ``env`` (AEC) and ``raw_env`` (AEC, unwrapped).
+    ``EKFSLAM-Team-v0`` in PettingZoo's registry (``pettingzoo.make("parallel", "EKFSLAM-Team-v0", n_robots=3)``,
+    or ``"aec"``), registered when ``ekfslam_gym.multi`` is imported; or made by the module's functions:
+    ``ekfslam_gym.multi.parallel_env``, ``env`` (AEC) and ``raw_env`` (AEC, unwrapped).
     """
 
     metadata = {"name": "ekfslam_team_v0", "render_modes": [], "is_parallelizable": True}
