@@ -103,3 +103,21 @@ def test_team_starts_are_clear_and_in_a_row_in_the_open():
     gaps = np.hypot(*(starts[:, None, :2] - starts[None, :, :2]).transpose(2, 0, 1))
     assert gaps[~np.eye(5, dtype=bool)].min() >= 0.5
     assert np.all(starts[:, 2] == layout.start[2])
+
+
+def test_chipmunk_calls_match_pymunks_api():
+    """The substeps through Chipmunk's own functions give pymunk's Python API's poses and contacts exactly,
+    robots touching each other and the walls included."""
+    starts = [(1.0, 1.0, 0.3), (2.0, 1.2, math.pi), (1.5, 2.0, -1.0)]
+    fast, slow = world(starts), world(starts)
+    slow.robots[0]._chipmunk = None  # the Python API's path
+    rng = np.random.default_rng(0)
+    touched = np.zeros(3, dtype=bool)
+    for _ in range(150):
+        commands = [tuple(c) for c in rng.uniform([-1, -2], [1, 2], (3, 2))]
+        assert fast.step(commands).tolist() == slow.step(commands).tolist()
+        assert fast.robot_collided.tolist() == slow.robot_collided.tolist()
+        touched |= fast.robot_collided | fast.wall_collided
+        for i in range(3):
+            assert fast.pose_tuple(i) == slow.pose_tuple(i)
+    assert touched.any()

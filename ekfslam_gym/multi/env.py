@@ -352,11 +352,7 @@ class TeamSLAMEnv(ParallelEnv):
         mean, cov, observed = self._mean, self._cov, self._observed
         k = 3 * self.n_robots
         seen = int(np.count_nonzero(observed))
-        if seen:
-            estimates = mean[k:].reshape(-1, 2)[observed]
-            rmse = float(np.sqrt(np.mean(np.sum((estimates - self._true_landmarks[observed]) ** 2, axis=1))))
-        else:
-            rmse = math.nan
+        rmse = kernels.map_rmse(mean, k, observed, self._true_landmarks)
         infos = {}
         for i, agent in enumerate(self.possible_agents):
             pose = mean[3 * i : 3 * i + 3].copy()

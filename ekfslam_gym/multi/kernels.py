@@ -127,3 +127,18 @@ def pose_nees(true_pose, mean, cov, first):
         return float(e @ np.linalg.solve(block, e))
     except Exception:  # noqa: BLE001 (numba raises a plain exception for a singular matrix)
         return math.nan
+
+
+@njit(cache=True)
+def map_rmse(mean, first, observed, truth):
+    """RMS position error (m) of the observed landmarks' estimates (from ``mean[first]`` on) against ``truth``
+    (n, 2); NaN with none observed."""
+    total = 0.0
+    count = 0
+    for j in range(observed.shape[0]):
+        if observed[j]:
+            dx = mean[first + 2 * j] - truth[j, 0]
+            dy = mean[first + 2 * j + 1] - truth[j, 1]
+            total += dx * dx + dy * dy
+            count += 1
+    return math.sqrt(total / count) if count else math.nan

@@ -174,6 +174,23 @@ class TeamWorld:
             counter[0] = 0
         h = self._h
         traces = [[p] for p in self._poses] if self._trace_substeps else None
+        calls = self.robots[0]._chipmunk
+        if calls is not None and calls[0] is self.space:
+            self._advance_chipmunk(calls, clipped, h, traces)
+        else:
+            self._advance_pymunk(clipped, h, traces)
+        self._prev_poses = self._poses
+        self._poses = [r.pose() for r in self.robots]
+        if traces is not None:
+            self._traces = traces
+        for i in range(self.n_robots):
+            self.wall_collided[i] = self._wall_contacts[i][0] > 0
+            self.robot_collided[i] = self._robot_contacts[i][0] > 0
+        return self.wall_collided
+
+    def _advance_pymunk(self, clipped, h, traces) -> None:
+        """The substeps through pymunk's Python API: every robot's command as ``DiffDriveRobot.advance`` sets
+        it, then one step of the shared space."""
         for robot, (_, omega) in zip(self.robots, clipped):
             robot.control.angular_velocity = omega
         for _ in range(self.substeps):
@@ -186,14 +203,34 @@ class TeamWorld:
                 for robot, trace in zip(self.robots, traces):
                     p = robot.body.position
                     trace.append((p.x, p.y, robot.body.angle))
-        self._prev_poses = self._poses
-        self._poses = [r.pose() for r in self.robots]
-        if traces is not None:
-            self._traces = traces
-        for i in range(self.n_robots):
-            self.wall_collided[i] = self._wall_contacts[i][0] > 0
-            self.robot_collided[i] = self._robot_contacts[i][0] > 0
-        return self.wall_collided
+
+    def _advance_chipmunk(self, calls, clipped, h, traces) -> None:
+        """``_advance_pymunk`` through Chipmunk's own functions, as ``DiffDriveRobot.advance`` calls them (the
+        same C calls in the same order, without pymunk's Python layer)."""
+        (
+            _,
+            step,
+            handle,
+            get_angle,
+            get_angular_velocity,
+            set_velocity,
+            set_angular_velocity,
+            _,
+            _,
+            position,
+        ) = calls
+        handles = [(robot._chipmunk[7], robot._chipmunk[8]) for robot in self.robots]
+        for (c, _), (_, omega) in zip(handles, clipped):
+            set_angular_velocity(c, omega)
+        for _ in range(self.substeps):
+            for (c, b), (v, omega) in zip(handles, clipped):
+                heading = get_angle(b) + (get_angular_velocity(b) + 0.5 * omega) * h
+                set_velocity(c, (v * math.cos(heading), v * math.sin(heading)))
+            step(handle, h)
+            if traces is not None:
+                for (_, b), trace in zip(handles, traces):
+                    p = position(b)
+                    trace.append((p.x, p.y, get_angle(b)))
 
     def pose_tuple(self, i: int) -> tuple[float, float, float]:
         """Robot i's true pose (x m, y m, theta rad), theta unwrapped."""
