@@ -167,3 +167,26 @@ def test_registered_with_pettingzoo():
     aec = pettingzoo.make("aec", ENV_ID, n_robots=2)
     aec.reset(seed=0)
     assert aec.agent_selection == "robot_0"
+
+
+@pytest.mark.parametrize(
+    "filter_settings",
+    [{"variant": "fej"}, {"variant": "iekf"}, {"motion_model": "odometry"}, {"motion_model": "velocity"},
+     {"update": "sequential"}, {"init_mode": "course"}],
+    ids=lambda s: "-".join(map(str, s.values())),
+)  # fmt: skip
+def test_filter_settings_apply_to_the_team(filter_settings):
+    """The filter section's variants and models reach the team filter, and the identity holds under each."""
+    team = parallel_env(n_robots=2, filter=filter_settings, **SMALL)
+    _, infos = team.reset(seed=8)
+    for name, value in filter_settings.items():
+        assert getattr(team.filter.settings, name) == value
+    rng = np.random.default_rng(1)
+    log_det = infos["robot_0"]["log_det"]
+    for _ in range(4):
+        _, _, _, _, infos = team.step(random_actions(team, rng))
+        assert infos["robot_1"]["reward_terms"]["info_gain"] == pytest.approx(
+            log_det - infos["robot_1"]["log_det"]
+        )
+        log_det = infos["robot_1"]["log_det"]
+    assert log_det == pytest.approx(np.linalg.slogdet(team.filter.cov)[1], abs=1e-6)
