@@ -159,7 +159,9 @@ class TeamPolicy:
         from stable_baselines3 import PPO
 
         model_path = Path(model_path)
-        self.model = PPO.load(model_path, device="cpu")
+        # The schedules are pickled functions of the training run: acting needs none of them.
+        custom = {"learning_rate": 0.0, "lr_schedule": lambda _: 0.0, "clip_range": lambda _: 0.0}
+        self.model = PPO.load(model_path, device="cpu", custom_objects=custom)
         stats = model_path.with_name(model_path.stem + VECNORMALIZE_SUFFIX)
         self._normalize = None
         if stats.is_file():
