@@ -14,6 +14,7 @@ import pytest
 pytest.importorskip("pettingzoo")
 
 from ekfslam_gym.multi import parallel_env  # noqa: E402
+from ekfslam_gym.multi.evaluation import run_episode  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "models" / "team_ppo_3robots.zip"
@@ -60,6 +61,21 @@ def test_recipe_errors_name_the_key(tmp_path):
     with pytest.raises(FileNotFoundError):
         read_recipe(tmp_path / "missing.yaml")
     assert read_recipe(ROOT / "configs" / "multi" / "ppo_team.yaml")["env_kwargs"] == {"n_robots": 3}
+
+
+@pytest.mark.parametrize("n_robots", [2, 3])
+def test_shipped_team_policy_runs_an_episode(n_robots):
+    pytest.importorskip("stable_baselines3")
+    from ekfslam_gym.multi.training import TeamPolicy
+
+    policy = TeamPolicy(SHIPPED)
+    team = parallel_env(n_robots=n_robots, max_episode_steps=5)
+    observations, _ = team.reset(seed=0)
+    actions = policy.act(observations)
+    assert set(actions) == set(team.agents)
+    assert all(team.action_space(a).contains(action) for a, action in actions.items())
+    metrics = run_episode(team, policy, seed=1)
+    assert np.isfinite(metrics["map_log_det"]) and metrics["time_to_complete"] > 0
 
 
 def test_docs_results_table_is_current():
