@@ -26,14 +26,15 @@ COLUMNS = (
     ("map_log_det", "map log det", "{:.0f}"),
     ("map_rmse", "RMSE (m)", "{:.3f}"),
     ("time_to_complete", "time to complete map (steps)", "{:.0f}"),
-    ("complete", "complete", "{:.2f}"),
+    ("complete", "complete (fraction)", "{:.2f}"),
     ("robot_loop_closures", "robot-robot loop closures", "{:.2f}"),
     ("collisions", "wall contacts", "{:.1f}"),
 )
 
 
 def table() -> str:
-    """The Markdown table: one block of rows per team size, IQM [95 % CI] of each metric."""
+    """The Markdown table: one block of rows per team size, IQM [95 % CI] of each metric (the fraction of
+    episodes for ``complete``)."""
     from ekfslam_gym.multi.evaluation import summarise
 
     lines = []
@@ -49,6 +50,9 @@ def table() -> str:
             cells = []
             for key, _, form in COLUMNS:
                 s = summary[key]
+                if key == "complete":  # a yes or no per episode: the fraction, not an IQM
+                    cells.append(form.format(s["mean"]))
+                    continue
                 cells.append(
                     f"{form.format(s['iqm'])} [{form.format(s['ci'][0])}, {form.format(s['ci'][1])}]"
                 )
