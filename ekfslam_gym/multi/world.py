@@ -6,6 +6,8 @@ substep command as ``DiffDriveRobot.advance``, applied to every robot before eac
 odometers of ``sim.odometry`` and the ``RangeBearingSensor``'s kernels. What a team adds:
 
 - robots touch: their discs collide with each other in pymunk (counted per robot, apart from wall contacts);
+  head-on at full speed they meet within one substep's closing travel (2 v_max dt / substeps) and are pushed
+  back to touching, since pymunk finds a contact after it has moved the bodies;
 - robots occlude: a landmark behind another robot's disc is not read, and the wall scan stops at a robot;
 - robots read each other: robot i reads robot j's position as (range, bearing) in its own frame, with j's
   identity, when j's centre lies within the sensor's range and field of view and no wall or third robot
