@@ -33,7 +33,6 @@ def still(env_id: str, seed: int, fraction: float, path: Path) -> Path:
     from ekfslam_gym.agents import make_agent
 
     import ekfslam_gym  # noqa: F401  (registers the ids)
-
     from ekfslam_gym.envs.episode import step_limit
 
     env = gym.make(env_id, render_mode="rgb_array")

@@ -20,6 +20,7 @@ EXPECTED = {
     "graph.py": "bearing-range",
     "layouts.py": "placement grid",
     "startup.py": "ratio EKFSLAM-v0 / CartPole-v1",
+    "team.py": "robot-step cost",
     "train.py": "env steps/s",
 }
 

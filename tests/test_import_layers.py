@@ -7,7 +7,7 @@ installed as ``ekfslam_gym.agents``), and layers that import only the layers bel
     envs | data
     evaluation
     agents | replay (the recorded drives replayed through the filter)
-    training (itself ordered: settings, demonstrations, artefacts, cloning, keep_cloning, pretraining, run, sweep)
+    training (itself ordered: settings, demonstrations, artefacts, cloning, keep_cloning, pretraining, run, sweep) | multi
     benchmark | pretrained (the protocol; the shipped policies with their envs)
     cli (the command lines, each also ``python -m ekfslam_gym.cli.<name>``)
 
@@ -41,7 +41,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("envs", "data"),
     ("evaluation",),
     ("agents", "replay"),
-    ("training",),
+    ("training", "multi"),
     ("benchmark", "pretrained"),
     ("cli",),
 )

@@ -36,7 +36,7 @@ from .. import seeds
 
 AGENT_NAMES: tuple[str, ...] = ("random", "circle", "lawnmower", "greedy", "greedy2", "frontier", "ppo")
 """The names ``ekfslam_gym.agents.AGENTS`` registers, for the parsers' help: importing the agents (numba, SciPy)
-would triple a ``--help``'s time. tests/test_command_lines.py holds the two equal."""
+would triple a ``--help``'s time. tests/cli/test_command_lines.py holds the two equal."""
 
 USAGE_EXIT = 2  # argparse's status for a usage error
 INTERRUPTED_EXIT = 130  # the shell's 128 + SIGINT

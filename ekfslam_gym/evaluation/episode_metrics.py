@@ -70,7 +70,7 @@ ASSOCIATION_KEYS: tuple[str, ...] = ("false_associations", "missed_associations"
 
 POSE_DIM = 3
 # metrics.nees_bounds(POSE_DIM, 1), chi2.ppf([0.025, 0.975], 3), written out so that importing the metrics does
-# not import scipy.stats (a second of every command's start-up); tests/test_metrics.py holds them equal.
+# not import scipy.stats (a second of every command's start-up); tests/evaluation/test_metrics.py holds them equal.
 NEES_STEP_BOUNDS = (0.21579528262389797, 9.348403604496148)
 
 

@@ -1,6 +1,6 @@
 """The README, the docs and the configs cannot drift from the code.
 
-- (every Python block of the docs runs, from outside the checkout: ``tests/test_docs_site.py``);
+- (every Python block of the docs runs, from outside the checkout: ``tests/docs/test_site.py``);
 - every repository path, dotted ``ekfslam_gym`` name, command-line flag and config key they name exists
   (the research log, a record of experiments, is held to paths and flags only: options it tried may be gone);
 - the generated pages and ``configs/env/default.yaml`` match the code (``docs/generate.py --check``), and every
@@ -53,7 +53,7 @@ def _code(text: str) -> list[str]:
     return blocks + re.findall(r"`([^`\n]+)`", prose)
 
 
-# The python blocks run from an empty folder outside the checkout: tests/test_docs_site.py.
+# The python blocks run from an empty folder outside the checkout: tests/docs/test_site.py.
 
 
 # ------------------------------------------------------------------------------------ names exist

@@ -618,7 +618,7 @@ def run_to_truncation(env, steps):
     return np.array(left), flags
 
 
-@pytest.mark.parametrize("env_id", [i for i in ENV_IDS if i.endswith("-v0")])  # v1: tests/test_v1_episode.py
+@pytest.mark.parametrize("env_id", [i for i in ENV_IDS if i.endswith("-v0")])  # v1: tests/envs/test_v1_episode.py
 def test_registered_ids_carry_their_preset_step_limit(env_id):
     limit = EnvConfig.from_overrides(**PRESETS[env_id]).max_episode_steps
     assert gym.spec(env_id).max_episode_steps == limit == {"EKFSLAM-v0": 500, "EKFSLAM-Loop-v0": 800,

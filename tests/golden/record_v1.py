@@ -1,4 +1,4 @@
-"""Record the seeded rollouts that ``tests/test_golden_rollouts_v1.py`` holds the v1 ids to.
+"""Record the seeded rollouts that ``tests/envs/test_golden_rollouts_v1.py`` holds the v1 ids to.
 
 ``python -m tests.golden.record_v1`` writes ``rollouts_v1.npz`` beside this file: the 500-step rollout of
 ``record.rollout`` (seed 123, seeded actions independent of the observations, the ids' own settings) of every

@@ -11,7 +11,7 @@ from ekfslam_gym.sim import LAYOUTS, Layout, make_layout, place_landmarks
 from ekfslam_gym.sim.geometry import min_wall_distance
 
 # the generators that draw their landmarks; ``surveyed`` is given them (tested at the end), ``map_server`` reads
-# a map file (tests/test_sim_map_server.py)
+# a map file (tests/sim/test_map_server.py)
 NAMES = sorted(set(LAYOUTS) - {"surveyed", "map_server"})
 
 

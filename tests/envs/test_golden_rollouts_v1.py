@@ -1,5 +1,5 @@
 """The v1 ids keep their behaviour: seeded 500-step rollouts of every registered v1 id against a recording
-(``tests/golden/record_v1.py`` wrote it; the v0 ids have theirs in ``tests/test_golden_rollouts.py``)."""
+(``tests/golden/record_v1.py`` wrote it; the v0 ids have theirs in ``tests/envs/test_golden_rollouts.py``)."""
 
 import numpy as np
 import pytest
