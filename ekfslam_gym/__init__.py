@@ -15,7 +15,7 @@ from typing import Any
 
 from gymnasium.envs.registration import WrapperSpec, register, registry
 
-__version__ = "0.2.0"  # the package's version (pyproject.toml reads it from here); CHANGELOG.md
+__version__ = "0.3.0"  # the package's version (pyproject.toml reads it from here); CHANGELOG.md
 
 
 def _register() -> None:
