@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..graph.sparse_solve import BACKENDS
-from .common import command_line, command_parser
+from .common import command_line, command_parser, refuse
 
 
 @command_line("graph")
@@ -44,7 +44,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     from ..data.graph_files import GTSAM_SUFFIXES, read_graph
     from ..graph.optimizer import GTSAM_LM, optimize
 
-    problem = read_graph(args.file)  # a missing or malformed file: one error line and exit 2 (command_line)
+    try:  # a missing or malformed file is the user's input: one line naming it (and the line), exit 2
+        problem = read_graph(args.file)
+    except (OSError, ValueError) as error:
+        refuse(parser, "", error)
     settings = args.settings
     if settings == "auto":
         settings = "gtsam" if args.file.suffix.lower() in GTSAM_SUFFIXES else "course"

@@ -1,5 +1,5 @@
 """``ekfslam-replay --dataset mrclam --team``: MRCLAM's five robots through one joint filter, beside the five
-single-robot replays (``evaluation.team_replay``, ``evaluation.team_report``)."""
+single-robot replays (``ekfslam_gym.replay.team``, ``ekfslam_gym.replay.team_report``)."""
 
 from __future__ import annotations
 
