@@ -17,8 +17,11 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..graph.sparse_solve import BACKENDS
 from .common import command_line, command_parser, refuse
+
+# ``graph.sparse_solve.BACKENDS`` and "auto", written out: importing the graph package (SciPy's sparse matrices)
+# would double --help's time. tests/cli/test_command_lines.py holds them equal.
+BACKEND_CHOICES = ("auto", "qdldl", "cholmod", "superlu")
 
 
 @command_line("graph")
@@ -29,7 +32,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--solver", choices=("gn", "lm"), default="gn", help="Gauss-Newton or Levenberg-Marquardt"
     )
     parser.add_argument(
-        "--backend", choices=("auto",) + BACKENDS, default="auto", help="sparse factorisation"
+        "--backend", choices=BACKEND_CHOICES, default="auto", help="sparse factorisation"
     )
     parser.add_argument(
         "--settings",

@@ -399,7 +399,7 @@ def test_cli_errors(tmp_path, capsys):
 
 def test_python_dash_m_entry_point(small_g2o):
     run = subprocess.run(
-        [sys.executable, "-m", "ekfslam_gym.graph", str(small_g2o), "--json"],
+        [sys.executable, "-m", "ekfslam_gym.cli.graph", str(small_g2o), "--json"],
         capture_output=True,
         text=True,
         check=True,
