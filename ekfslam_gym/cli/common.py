@@ -76,9 +76,12 @@ def error_message(error: BaseException) -> str:
 
 
 def refuse(parser: argparse.ArgumentParser, flag: str, error: BaseException) -> NoReturn:
-    """``parser.error`` for an input the user named (``flag``: the option, with its value where that helps),
-    with the message of the ``error`` that reading it raised: one line, exit status 2."""
-    parser.error(f"{flag}: {error_message(error)}" if flag else error_message(error))
+    """End the command on an input the user named (``flag``: the option, with its value where that helps; empty
+    when the error names the file itself) with the message of the ``error`` reading it raised: one line on
+    stderr, ``<prog>: error: ...``, and exit status 2. No usage line: the command line was right, the file or
+    value it named was not."""
+    message = f"{flag}: {error_message(error)}" if flag else error_message(error)
+    parser.exit(USAGE_EXIT, f"{parser.prog}: error: {message}\n")
 
 
 def command_line(command: str, prog: str | None = None) -> Callable[[Callable[..., Any]], Callable[..., Any]]:

@@ -17,8 +17,11 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..graph.sparse_solve import BACKENDS
-from .common import command_line, command_parser, error_message
+from .common import command_line, command_parser, refuse
+
+# ``graph.sparse_solve.BACKENDS`` and "auto", written out: importing the graph package (SciPy's sparse matrices)
+# would double --help's time. tests/cli/test_command_lines.py holds them equal.
+BACKEND_CHOICES = ("auto", "qdldl", "cholmod", "superlu")
 
 
 @command_line("graph")
@@ -28,9 +31,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--solver", choices=("gn", "lm"), default="gn", help="Gauss-Newton or Levenberg-Marquardt"
     )
-    parser.add_argument(
-        "--backend", choices=("auto",) + BACKENDS, default="auto", help="sparse factorisation"
-    )
+    parser.add_argument("--backend", choices=BACKEND_CHOICES, default="auto", help="sparse factorisation")
     parser.add_argument(
         "--settings",
         choices=("auto", "course", "gtsam"),
@@ -44,10 +45,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     from ..data.graph_files import GTSAM_SUFFIXES, read_graph
     from ..graph.optimizer import GTSAM_LM, optimize
 
-    try:
+    try:  # a missing or malformed file is the user's input: one line naming it (and the line), exit 2
         problem = read_graph(args.file)
-    except (OSError, ValueError) as error:  # the file the user named: one error line, exit 2 (command_line)
-        raise SystemExit(error_message(error)) from None
+    except (OSError, ValueError) as error:
+        refuse(parser, "", error)
     settings = args.settings
     if settings == "auto":
         settings = "gtsam" if args.file.suffix.lower() in GTSAM_SUFFIXES else "course"

@@ -1,5 +1,5 @@
 """``ekfslam-replay --dataset mrclam --team``: MRCLAM's five robots through one joint filter, beside the five
-single-robot replays (``replay.team``, ``replay.team_report``)."""
+single-robot replays (``ekfslam_gym.replay.team``, ``ekfslam_gym.replay.team_report``)."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import argparse
 import json
 
 from ..evaluation.report import json_safe
+from .common import refuse
 
 
 def replay_team_data(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
@@ -16,18 +17,15 @@ def replay_team_data(parser: argparse.ArgumentParser, args: argparse.Namespace) 
     from ..replay.team import TeamReplaySettings, replay_team
     from ..replay.team_report import save_team_picture, single_figures, team_figures, team_table
 
-    try:
+    try:  # the folder the user named: one line naming it, exit 2
         runs = [load_mrclam(args.data, robot) for robot in ROBOT_SUBJECTS]
     except (OSError, ValueError) as error:
-        parser.error(str(error))
+        refuse(parser, "--data", error)
     noise = FITTED_MRCLAM if args.noise == "fitted" else ReplaySettings()
     settings = TeamReplaySettings.with_noise_of(noise, variant=args.variant or "ekf")
     alone = noise.choosing(variant=settings.variant)
     singles = [single_figures(replay_drive(build_drive(run), run.landmarks.ids, alone), run) for run in runs]
-    try:
-        result = replay_team(runs, settings)
-    except ValueError as error:
-        parser.error(str(error))
+    result = replay_team(runs, settings)  # anything raised here is not the user's input: a traceback
     joint = team_figures(result)
     if args.plot is not None:
         save_team_picture(

@@ -1,7 +1,7 @@
 """Cooperative SLAM on MRCLAM: the five robots' drives through one joint filter (``filter.team.TeamEKF``).
 
 Every robot's odometry, landmark readings and readings of the other robots go through one centralised EKF in
-time order. Each robot's drive is stepped as ``evaluation.mrclam.build_drive`` steps a single robot's (zero-order
+time order. Each robot's drive is stepped as ``replay.mrclam.build_drive`` steps a single robot's (zero-order
 hold of the velocity odometry, the velocity model on the increments with dt = 1 s), with extra step ends at the
 times other robots read it, so that a robot-to-robot reading meets both robots' poses at its own time. Steps
 that end at one time are predicted first, then their readings are fused: landmark readings by barcode (known

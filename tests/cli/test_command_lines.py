@@ -79,9 +79,9 @@ def test_the_package_has_no_other_python_dash_m_entry_point():
 
 @pytest.mark.parametrize("script", sorted(SCRIPTS))
 def test_help_imports_only_what_the_parser_needs(script):
-    """``--help`` runs without SciPy's statistics, torch, SB3, matplotlib or the agents (numba): each costs a
-    large part of a second or more at start-up (bench/startup.py times them)."""
-    heavy = ("scipy.stats", "torch", "stable_baselines3", "matplotlib", "ekfslam_gym.agents", "numba")
+    """``--help`` runs without SciPy, torch, SB3, matplotlib or the agents (numba): each costs a large part of a
+    second or more at start-up (bench/startup.py times them)."""
+    heavy = ("scipy", "torch", "stable_baselines3", "matplotlib", "ekfslam_gym.agents", "numba")
     code = (
         "import contextlib, io, sys\n"
         f"from {SCRIPTS[script].replace(':', ' import ')}\n"
@@ -94,10 +94,14 @@ def test_help_imports_only_what_the_parser_needs(script):
     assert run.stdout.strip() == "[]", f"{script} --help imports {run.stdout.strip()}"
 
 
-def test_the_help_agent_names_are_the_registry():
+def test_the_help_names_written_out_are_the_library_ones():
     from ekfslam_gym.agents import AGENTS
 
+    from ekfslam_gym.cli.graph import BACKEND_CHOICES
+    from ekfslam_gym.graph.sparse_solve import BACKENDS
+
     assert AGENT_NAMES == tuple(AGENTS)
+    assert BACKEND_CHOICES == ("auto", *BACKENDS)
 
 
 # ---------------------------------------------------------------------------------------------- the wrapper
