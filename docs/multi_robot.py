@@ -1,5 +1,5 @@
 """Write the results table of docs/multi-robot.md from the team episodes in docs/data/team/ (the JSON files that
-``python -m ekfslam_gym.multi.evaluation ... --out`` writes), between the page's markers.
+``python -m ekfslam_gym.cli.team_evaluate ... --out`` writes), between the page's markers.
 
     python docs/multi_robot.py           # rewrite the table
     python docs/multi_robot.py --check   # exit 1 if the table is stale

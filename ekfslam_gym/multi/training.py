@@ -12,12 +12,11 @@ arguments. A run writes into its folder ``model.zip``, ``model_vecnormalize.pkl`
 recipe as run) and ``checkpoints/``; run again, it resumes from the newest checkpoint (its statistics beside
 it). ``max_minutes`` stops a run early, saved, so it fits a time budget and can be resumed later.
 
-    python -m ekfslam_gym.multi.training configs/multi/ppo_team.yaml runs/team3 [--max-minutes 35]
+    python -m ekfslam_gym.cli.team_train configs/multi/ppo_team.yaml runs/team3 [--max-minutes 35]
 """
 
 from __future__ import annotations
 
-import argparse
 import re
 import time
 from collections.abc import Mapping
@@ -179,16 +178,3 @@ class TeamPolicy:
             batch = self._normalize.normalize_obs(batch)
         actions, _ = self.model.predict(batch, deterministic=True)
         return {agent: int(action) for agent, action in zip(agents, actions)}
-
-
-def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("recipe", help="the recipe YAML (configs/multi/ppo_team.yaml)")
-    parser.add_argument("out", help="the run's folder (resumed from its newest checkpoint if it has one)")
-    parser.add_argument("--max-minutes", type=float, default=None, help="stop (saved) after this wall time")
-    args = parser.parse_args(argv)
-    train(read_recipe(args.recipe), args.out, args.max_minutes)
-
-
-if __name__ == "__main__":
-    main()
