@@ -273,7 +273,8 @@ def about(rows: Sequence[Mapping[str, Any]], quick: bool, seeds_per_case: int) -
         command += f" --suite-seeds {seeds_per_case}"
     agents = _ordered(r["agent"] for r in rows)
     text = (
-        f"Made by `{command} --out docs/results` (ekfslam-gym {__version__}, {len(rows)} episodes): "
+        f"Made by `{command} --out docs/results` in the project's repository (ekfslam-gym {__version__}, {len(rows)} "
+        "episodes): "
         f"{seeds_per_case} held-out seed(s) per env, the first of each env's held-out seeds "
         f"(`ekfslam_gym.seeds`), {len(agents)} agents, every episode its id's full horizon at the default tier "
         "(medium); IQM [95 % bootstrap CI] over the episodes. The shipped policies, each trained on one v0 id, run "
