@@ -57,7 +57,7 @@ $(RLLIB_VENV)/.installed: pyproject.toml
 	touch $@
 
 test-rllib: $(RLLIB_VENV)/.installed
-	$(RLLIB_VENV)/bin/python -m pytest -p no:cacheprovider tests/training/test_rllib.py tests/envs/test_env.py tests/envs/test_golden_rollouts.py
+	$(RLLIB_VENV)/bin/python -m pytest -p no:cacheprovider tests/training/test_rllib.py tests/envs/test_api.py tests/envs/test_step_limit.py tests/envs/test_golden_rollouts.py
 
 bench: install  # bench/graph.py compares with GTSAM when the bench extra is installed (EXTRAS=...,bench)
 	$(BIN)/python bench/startup.py

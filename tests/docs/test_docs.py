@@ -15,6 +15,7 @@ import contextlib
 import importlib
 import io
 import re
+import subprocess
 import sys
 from functools import cache
 from pathlib import Path
@@ -384,3 +385,11 @@ def test_comparison_figure_draws_from_per_episode_json(tmp_path, monkeypatch) ->
                             str(tmp_path / "comparison.png")]) == 0  # fmt: skip
     assert (tmp_path / "comparison.png").stat().st_size > 0
     assert set(comparison.read("EKFSLAM-v0")) == {"greedy", "frontier", "ppo"}
+
+
+def test_docs_page_is_generated_from_the_current_docstring():
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[2] / "docs" / "generate.py"
+    result = subprocess.run([sys.executable, str(script), "--check"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr

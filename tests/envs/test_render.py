@@ -7,6 +7,7 @@ import sys
 import time
 import warnings
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -442,3 +443,15 @@ def test_env_frames_shade_no_pixel_behind_a_wall() -> None:
         )  # 6 env steps, 60 controls
         assert base.elapsed_steps == 60
         env.close()
+
+
+def test_rgb_array_render_is_a_non_blank_frame():
+    pytest.importorskip("pygame")
+    env = gym.make("EKFSLAM-v0", render_mode="rgb_array")
+    env.reset(seed=0)
+    for _ in range(5):
+        env.step(np.array([0.5, 0.3]))
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.shape == (640, 640, 3)
+    assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 5
+    env.close()
