@@ -97,6 +97,26 @@ def _check_positive_definite(arr: np.ndarray, name: str) -> None:
         raise ValueError(f"{name} must be positive definite")
 
 
+def _motion_inputs(
+    control, motion_model: str, width: int, motion_cov, control_cov, motion_noise: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    """A prediction's (control, noise, noise in control space) as ``EKFSLAM.predict`` takes them, checked: the
+    control has the model's ``width`` numbers; ``control_cov`` (width x width) wins over ``motion_cov`` (3 x 3,
+    pose space), and neither means ``motion_noise``. Shared by ``EKFSLAM`` and ``TeamEKF``."""
+    control = np.asarray(control, dtype=float)
+    if control.shape != (width,):
+        raise ValueError(f"control must be {width} numbers for the {motion_model} model, got {control!r}")
+    if control_cov is not None:
+        noise = np.asarray(control_cov, dtype=float)
+        if noise.shape != (width, width):
+            raise ValueError(f"control_cov must be ({width}, {width}), got {noise.shape}")
+        return control, noise, True
+    noise = motion_noise if motion_cov is None else np.asarray(motion_cov, dtype=float)
+    if noise.shape != (3, 3):
+        raise ValueError(f"motion_cov must be (3, 3), got {noise.shape}")
+    return control, noise, False
+
+
 class EKFSLAM:
     """EKF-SLAM for ``n_landmarks`` point landmarks observed by a range-bearing sensor.
 
@@ -321,23 +341,10 @@ class EKFSLAM:
         (control space: 3x3 odometry and wheels, 2x2 velocity, mapped through V M V^T); neither means the
         constructor's ``motion_noise``.
         """
-        control = np.asarray(control, dtype=float)
-        width = self._width
-        if control.shape != (width,):
-            raise ValueError(
-                f"control must be {width} numbers for the {self.motion_model} model, got {control!r}"
-            )
-        self._control[:width] = control
-        if control_cov is not None:
-            noise = np.asarray(control_cov, dtype=float)
-            if noise.shape != (width, width):
-                raise ValueError(f"control_cov must be ({width}, {width}), got {noise.shape}")
-            in_control_space = True
-        else:
-            noise = self.motion_noise if motion_cov is None else np.asarray(motion_cov, dtype=float)
-            if noise.shape != (3, 3):
-                raise ValueError(f"motion_cov must be (3, 3), got {noise.shape}")
-            in_control_space = False
+        control, noise, in_control_space = _motion_inputs(
+            control, self.motion_model, self._width, motion_cov, control_cov, self.motion_noise
+        )
+        self._control[: self._width] = control
         delta, status = compiled.predict(
             self._arrays,
             self._options,

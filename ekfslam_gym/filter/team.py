@@ -53,9 +53,11 @@ from .ekf import (
     _VARIANT_CODES,
     COURSE_MEASUREMENT_NOISE,
     COURSE_MOTION_NOISE,
+    EKFSLAM,
     FilterDivergedError,
     _as_covariance,
     _check_positive_definite,
+    _motion_inputs,
     _read_only,
     _settings,
 )
@@ -284,23 +286,10 @@ class TeamEKF:
         """Move robot ``robot`` by its control (as ``EKFSLAM.predict``: the model's control, and noise in
         pose space ``motion_cov`` or control space ``control_cov``); returns the change of log det Sigma."""
         robot = self._robot(robot)
-        control = np.asarray(control, dtype=float)
-        width = self._width
-        if control.shape != (width,):
-            raise ValueError(
-                f"control must be {width} numbers for the {self.motion_model} model, got {control!r}"
-            )
-        self._control[:width] = control
-        if control_cov is not None:
-            noise = np.asarray(control_cov, dtype=float)
-            if noise.shape != (width, width):
-                raise ValueError(f"control_cov must be ({width}, {width}), got {noise.shape}")
-            in_control_space = True
-        else:
-            noise = self.motion_noise if motion_cov is None else np.asarray(motion_cov, dtype=float)
-            if noise.shape != (3, 3):
-                raise ValueError(f"motion_cov must be (3, 3), got {noise.shape}")
-            in_control_space = False
+        control, noise, in_control_space = _motion_inputs(
+            control, self.motion_model, self._width, motion_cov, control_cov, self.motion_noise
+        )
+        self._control[: self._width] = control
         delta, status = team_kernels.predict(
             self._mean, self._cov, self._P, robot, self._model_code, self._control, self.dt, self.wheel_base,
             np.ascontiguousarray(noise), in_control_space, self._tracking, self._prior_poses, self._fej,
@@ -389,7 +378,7 @@ class TeamEKF:
         """The initialised landmark slot each of robot ``robot``'s readings (m, 2) comes from, -1 for none:
         ``EKFSLAM.associate`` on the robot's pose and the map (their joint Gaussian, a marginal of the team's),
         with the same ``AssociationSettings`` (kind, gate_prob). Changes nothing."""
-        code, gates, _ = self._association_settings(settings)
+        code, gates, _, _, _ = self._association_options(settings)
         robot = self._robot(robot)
         readings = np.ascontiguousarray(np.asarray(readings, dtype=float).reshape(-1, 2))
         if not np.all(np.isfinite(readings)):
@@ -411,7 +400,7 @@ class TeamEKF:
         within ``settings.confirm_steps`` of the calls for the robot that started it (0: never; a reading by any
         robot confirms it). Returns an ``UnknownCorrection`` (slots used, which were new, slots forgotten, change of log det
         Sigma)."""
-        code, gates, new_threshold = self._association_settings(settings)
+        code, gates, new_threshold, _, _ = self._association_options(settings)
         confirm_within = int(settings.confirm_steps)
         robot = self._robot(robot)
         readings = np.ascontiguousarray(np.asarray(readings, dtype=float).reshape(-1, 2))
@@ -484,17 +473,8 @@ class TeamEKF:
         index = np.r_[o : o + 3, 3 * self.n_robots : self.state_size]
         return self._mean[index], np.ascontiguousarray(self._cov[np.ix_(index, index)])
 
-    def _association_settings(self, settings: AssociationSettings) -> tuple[int, np.ndarray, float]:
-        """(method code, joint gates, new-landmark threshold) of validated ``settings``, computed once each."""
-        if not isinstance(settings, AssociationSettings):
-            raise TypeError(f"settings must be an AssociationSettings, got {type(settings).__name__}")
-        found = self._association_cache.get(settings)
-        if found is None:
-            code = association.check_method(settings.kind)
-            gates = association.gate_table(settings.gate_prob, self.n_landmarks)
-            found = (code, gates, association.chi2_even_ppf(settings.new_gate_prob, 2))
-            self._association_cache[settings] = found
-        return found
+    # EKFSLAM's, on this filter's landmark count and cache: the same options for the same settings object.
+    _association_options = EKFSLAM._association_options
 
     # ------------------------------------------------------------------ helpers
     def _robot(self, robot) -> int:
