@@ -363,7 +363,34 @@ def _update(
             H_used[offset + a, r, 3] = Hm[a, r, 0]
             H_used[offset + a, r, 4] = Hm[a, r, 1]
 
-    # W^T = L^-1 H Sigma (k x n), a forward substitution along whole contiguous rows.
+    Wt = _gain_rows(HS, L, k, n)
+    y = _forward_solve(L, innovation)
+
+    for row in range(n):
+        v = 0.0
+        for i in range(k):
+            v += Wt[i, row] * y[i]
+        mean[row] += v
+    mean[2] = wrap_angle(mean[2])
+    _subtract_gain_rows(cov, Wt, k, n)
+
+    if not track:
+        return 0.0, OK
+    logdet_S = 0.0
+    for i in range(k):
+        logdet_S += 2.0 * math.log(L[i, i])
+    info = inv3(P)
+    for a in range(m):
+        info += sandwich_t(Hx[a], Q_inv)
+    _symmetric_3x3(info)
+    P[:, :] = inv3(info)
+    return m * logdet_Q - logdet_S, OK
+
+
+@njit(cache=True)
+def _gain_rows(HS, L, k, n):
+    """W^T = L^-1 H Sigma (k x n) in place of ``HS``, L the Cholesky factor of S: a forward substitution along
+    whole contiguous rows. Returns ``HS``."""
     Wt = HS
     for i in range(k):
         wi = Wt[i]
@@ -375,18 +402,18 @@ def _update(
         lii = L[i, i]
         for col in range(n):
             wi[col] /= lii
-    y = _forward_solve(L, innovation)
+    return Wt
 
-    for row in range(n):
-        v = 0.0
-        for i in range(k):
-            v += Wt[i, row] * y[i]
-        mean[row] += v
-    mean[2] = wrap_angle(mean[2])
-    # Four (then two) rows of W^T per sweep of Sigma's row: the same products subtracted in the same order as
-    # one at a time (so Sigma stays exactly symmetric), with a quarter of the loads and stores. A row whose
-    # column of W^T is zero (a landmark not yet seen, uncorrelated with everything) would subtract only zeros:
-    # it is skipped, which makes the update O(k N n) for n seen of N states instead of O(k N^2).
+
+@njit(cache=True)
+def _subtract_gain_rows(cov, Wt, k, n):
+    """Sigma -= W W^T (the EKF's covariance update), row by row.
+
+    Four (then two) rows of W^T per sweep of Sigma's row: the same products subtracted in the same order as
+    one at a time (so Sigma stays exactly symmetric), with a quarter of the loads and stores. A row whose column
+    of W^T is zero (a landmark not yet seen, uncorrelated with everything) would subtract only zeros: it is
+    skipped, which makes the update O(k N n) for n seen of N states instead of O(k N^2). k is even (two
+    readings' rows per landmark reading)."""
     for row in range(n):
         untouched = True
         for i in range(k):
@@ -416,18 +443,6 @@ def _update(
             a1 = Wt[i + 1]
             for col in range(n):
                 r[col] = (r[col] - w0 * a0[col]) - w1 * a1[col]
-
-    if not track:
-        return 0.0, OK
-    logdet_S = 0.0
-    for i in range(k):
-        logdet_S += 2.0 * math.log(L[i, i])
-    info = inv3(P)
-    for a in range(m):
-        info += sandwich_t(Hx[a], Q_inv)
-    _symmetric_3x3(info)
-    P[:, :] = inv3(info)
-    return m * logdet_Q - logdet_S, OK
 
 
 @njit(cache=True)

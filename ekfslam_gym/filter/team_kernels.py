@@ -31,7 +31,9 @@ from .kernels import (
     ITERATION_TOLERANCE,
     _cholesky_in_place,
     _forward_solve,
+    _gain_rows,
     _solve_lower_upper,
+    _subtract_gain_rows,
     det3,
     inv2,
     inv3,
@@ -289,17 +291,7 @@ def _update(
             break
     L = S
 
-    Wt = HS
-    for i in range(k):
-        wi = Wt[i]
-        for p in range(i):
-            lip = L[i, p]
-            wp = Wt[p]
-            for col in range(n):
-                wi[col] -= lip * wp[col]
-        lii = L[i, i]
-        for col in range(n):
-            wi[col] /= lii
+    Wt = _gain_rows(HS, L, k, n)
     y = _forward_solve(L, innovation)
 
     for row in range(n):
@@ -309,35 +301,7 @@ def _update(
         mean[row] += v
     for r in range(n_robots):
         mean[3 * r + 2] = wrap_angle(mean[3 * r + 2])
-    for row in range(n):
-        untouched = True
-        for i in range(k):
-            if Wt[i, row] != 0.0:
-                untouched = False
-                break
-        if untouched:
-            continue
-        r = cov[row]
-        i = 0
-        while i + 4 <= k:
-            w0 = Wt[i, row]
-            w1 = Wt[i + 1, row]
-            w2 = Wt[i + 2, row]
-            w3 = Wt[i + 3, row]
-            a0 = Wt[i]
-            a1 = Wt[i + 1]
-            a2 = Wt[i + 2]
-            a3 = Wt[i + 3]
-            for col in range(n):
-                r[col] = (((r[col] - w0 * a0[col]) - w1 * a1[col]) - w2 * a2[col]) - w3 * a3[col]
-            i += 4
-        if i < k:
-            w0 = Wt[i, row]
-            w1 = Wt[i + 1, row]
-            a0 = Wt[i]
-            a1 = Wt[i + 1]
-            for col in range(n):
-                r[col] = (r[col] - w0 * a0[col]) - w1 * a1[col]
+    _subtract_gain_rows(cov, Wt, k, n)
 
     if not track:
         return 0.0, OK
