@@ -48,14 +48,20 @@ def resolve_config(name_or_path: str | Path) -> Path:
 
 
 def shipped_env_ids() -> list[str]:
-    """The env ids with a shipped policy."""
+    """The env ids with a shipped policy file of their own (``ppo_<env-id>.zip``)."""
     return sorted(p.stem[len("ppo_") :] for p in _folder(MODELS).glob("ppo_*.zip"))
 
 
 def shipped_model(env_id: str) -> Path:
-    """``ppo_<env_id>.zip`` of the shipped policy for ``env_id`` (its statistics and record lie beside it)."""
+    """``ppo_<env_id>.zip`` of the shipped policy for ``env_id`` (its statistics and record lie beside it); for
+    a v1 layout id without a file of its own (``ekfslam_gym.envs.presets.GENERALIST_IDS``), the generalist's,
+    ``ppo_EKFSLAM-Mix-v1.zip``: one policy for every layout."""
+    from .envs.presets import GENERALIST_IDS, MIX_ID
+
     env_id = env_id.split(":")[-1]
     path = _folder(MODELS) / f"ppo_{env_id}.zip"
+    if not path.is_file() and env_id in GENERALIST_IDS:
+        path = _folder(MODELS) / f"ppo_{MIX_ID}.zip"
     if not path.is_file():
         raise ValueError(f"no shipped policy for {env_id!r}; shipped: {', '.join(shipped_env_ids())}")
     return path

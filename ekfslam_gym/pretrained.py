@@ -79,8 +79,9 @@ def make_env_for_model(
 def resolve_env_id(agents: Sequence[Any], env_id: str | None = None, force: bool = False) -> str:
     """The env to run ``agents`` on: ``env_id`` when given, else the one their training records name
     (``trained_env_id``; one for all), else ``DEFAULT_ENV_ID``. ValueError when agents were trained on different
-    envs and none is given, or when ``env_id`` is not the one an agent was trained on and not ``force``d (then a
-    warning says so)."""
+    envs and none is given, or when ``env_id`` is not one an agent was trained for (its own; for a policy trained
+    on ``EKFSLAM-Mix-v1`` every v1 layout id, ``presets.trained_for``) and not ``force``d (then a warning says
+    so)."""
     trained = {a: str(a.trained_env_id) for a in agents if getattr(a, "trained_env_id", None)}
     if env_id is None:
         ids = sorted({t.split(":")[-1] for t in trained.values()})
@@ -88,8 +89,10 @@ def resolve_env_id(agents: Sequence[Any], env_id: str | None = None, force: bool
             raise ValueError(f"the models were trained on different envs ({', '.join(ids)}); give --env-id "
                              "(and --force to run them off their own)")  # fmt: skip
         return ids[0] if ids else DEFAULT_ENV_ID
+    from .envs.presets import trained_for
+
     for agent, trained_id in trained.items():
-        if trained_id.split(":")[-1] != env_id.split(":")[-1]:
+        if env_id.split(":")[-1] not in trained_for(trained_id):
             if not force:
                 raise ValueError(f"{agent!r} was trained on {trained_id}, not {env_id}: leave out --env-id to "
                                  f"evaluate it on {trained_id}, or add --force")  # fmt: skip

@@ -17,8 +17,8 @@ from ekfslam_gym.pretrained import resolve_env_id
 
 ROOT = Path(__file__).resolve().parent.parent
 IDS = sorted(
-    i for i in gym.registry if i.startswith("EKFSLAM") and i.endswith("-v0")
-)  # the ids with a policy
+    [*(i for i in gym.registry if i.startswith("EKFSLAM") and i.endswith("-v0")), "EKFSLAM-Mix-v1"]
+)  # the ids with a policy file of their own: the v0 specialists and the generalist
 
 
 def test_every_top_level_recipe_is_packaged_and_nothing_else():
@@ -164,3 +164,71 @@ def test_the_sweep_resolves_its_default_config_from_any_folder(tmp_path, monkeyp
     monkeypatch.chdir(tmp_path)
     args = sweep._build_parser().parse_args(["--seeds", "0"])
     assert packaged.resolve_config(args.config) == packaged.resolve_config("ppo").resolve()
+
+
+# ---------------------------------------------------------------------------------------------- the generalist
+def test_every_v1_layout_id_gets_the_generalist_and_nothing_else_does():
+    from ekfslam_gym.envs.presets import FAMILY_IDS, GENERALIST_IDS, MIX_ID
+
+    generalist = packaged.shipped_model(MIX_ID)
+    assert set(GENERALIST_IDS) == {*FAMILY_IDS, "EKFSLAM-Large-v1"}
+    for env_id in GENERALIST_IDS:
+        assert packaged.shipped_model(env_id) == generalist
+        assert packaged.shipped_model(f"ekfslam_gym:{env_id}") == generalist
+    assert packaged.shipped_model("EKFSLAM-Large-v0").name == "ppo_EKFSLAM-Large-v0.zip"  # v0 keeps its own
+    with pytest.raises(ValueError, match="no shipped policy for 'EKFSLAM-Large-v2'"):
+        packaged.shipped_model("EKFSLAM-Large-v2")
+
+
+def test_a_policy_trained_on_the_mix_runs_on_every_v1_layout_id_and_only_there():
+    from ekfslam_gym.envs.presets import GENERALIST_IDS
+
+    mixed = _Trained("EKFSLAM-Mix-v1")
+    for env_id in (*GENERALIST_IDS, "EKFSLAM-Mix-v1"):
+        assert resolve_env_id([mixed], env_id) == env_id
+    assert resolve_env_id([mixed], None) == "EKFSLAM-Mix-v1"
+    with pytest.raises(ValueError, match="was trained on EKFSLAM-Mix-v1, not EKFSLAM-v0"):
+        resolve_env_id([mixed], "EKFSLAM-v0")  # the v0 task is another task
+    with pytest.raises(ValueError, match="was trained on EKFSLAM-Maze-v1, not EKFSLAM-Rooms-v1"):
+        resolve_env_id([_Trained("EKFSLAM-Maze-v1")], "EKFSLAM-Rooms-v1")  # only the mix generalises by name
+
+
+def test_the_generalist_drives_every_v1_layout_id_at_every_tier():
+    """The shipped generalist: its record names the mix and the recipe; loaded by any v1 layout id, it runs on
+    that id's worlds (the spaces are the mix's) with its LSTM state. Nothing about how well."""
+    from ekfslam_gym.artefacts import record_beside
+    from ekfslam_gym.benchmark.generalisation import zero_shot_settings
+    from ekfslam_gym.envs.presets import GENERALIST_IDS
+
+    pytest.importorskip("sb3_contrib")
+    model = packaged.shipped_model("EKFSLAM-Mix-v1")
+    record = record_beside(model)
+    assert record.env_id == "EKFSLAM-Mix-v1" and record.algo == "ppo_lstm"
+    assert record.entry["pretrain"]["planner"] == "frontier"  # the recipe: cloned, then fine-tuned
+    assert "configs/ppo_lstm_generalist_bc.yaml" in model.with_name(f"{model.stem}_config.yaml").read_text()
+    for env_id in GENERALIST_IDS:
+        agent = ekfslam_gym.load_pretrained(env_id)
+        assert agent.trained_env_id == "EKFSLAM-Mix-v1" and agent.recurrent
+        tiers = ("easy", "hard") if env_id != "EKFSLAM-Large-v1" else (None,)
+        for tier in tiers:
+            settings = {**zero_shot_settings(agent.trained_env_kwargs), **({"tier": tier} if tier else {})}
+            env = gym.make(env_id, max_episode_steps=3, **settings)
+            assert env.observation_space == agent.make_env().observation_space
+            observation, _ = env.reset(seed=20000)
+            agent.reset(env, 20000)
+            done = False
+            while not done:
+                action = agent.act(observation)
+                assert env.action_space.contains(action)
+                observation, _, terminated, truncated, _ = env.step(action)
+                done = terminated or truncated
+            env.close()
+
+
+def test_evaluate_gives_the_generalist_for_a_v1_layout_id_without_model(capsys):
+    from ekfslam_gym.cli.evaluate import main
+
+    argv = ["--agent", "ppo", "--env-id", "EKFSLAM-Maze-v1", "--seeds", "20000", "--max-episode-steps", "2",
+            "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    assert capsys.readouterr().out.startswith("EKFSLAM-Maze-v1, 1 seeds")

@@ -59,6 +59,19 @@ def family_preset(family: str, tier: str = DEFAULT_TIER) -> dict[str, Any]:
 FAMILY_IDS: dict[str, str] = {family_id(family): family for family in FAMILIES}
 """The family ids by id: their layout family, whose tiers ``tier=`` picks."""
 
+GENERALIST_IDS: tuple[str, ...] = (*FAMILY_IDS, "EKFSLAM-Large-v1")
+"""The v1 layout ids a policy trained on ``EKFSLAM-Mix-v1`` is made for: every family id (training and held-out
+families alike, at any tier) and Large-v1. They share Mix-v1's spaces, so one such policy (the shipped
+generalist) serves them all."""
+
+
+def trained_for(env_id: str) -> tuple[str, ...]:
+    """The ids a policy trained on ``env_id`` is meant to run on: its own, and for ``EKFSLAM-Mix-v1`` also every
+    ``GENERALIST_IDS`` id (``env_id`` may carry a ``module:`` prefix)."""
+    env_id = env_id.split(":")[-1]
+    return (env_id, *GENERALIST_IDS) if env_id == MIX_ID else (env_id,)
+
+
 PRESETS: dict[str, dict] = {
     "EKFSLAM-v0": {},
     "EKFSLAM-Loop-v0": {"world": {"layout": "loop"}, "max_episode_steps": 800},
