@@ -14,11 +14,13 @@ Every id the package registers at build time gets its page, so a new id is docum
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
+GIF_ENV = "EKFSLAM-Maze-v1"  # the generalist's GIF (docs/ppo_EKFSLAM-Mix-v1.gif): a held-out family
 # The five numbers that say how good a run was (Evaluation protocol defines each), best first in the table.
 HEADLINE = (
     ("map_log_det", "map log det Σ ↓"),
@@ -144,7 +146,7 @@ def unicode_math(text: str) -> str:
     return "".join(parts)
 
 
-def render_env_page(env_id: str, generated: str, recipe: str | None = None) -> str:
+def render_env_page(env_id: str, generated: str, recipes: Mapping[str, str] | None = None) -> str:
     import gymnasium as gym
 
     from ekfslam_gym.envs import EKFSLAMEnv
@@ -235,7 +237,7 @@ def render_env_page(env_id: str, generated: str, recipe: str | None = None) -> s
         "```",
         "",
     ]
-    lines += _shipped_policy(env_id, recipe)
+    lines += _shipped_policy(env_id, recipes or {})
     lines += ["## Version history", "", "| id | package | what changed |", "|---|---|---|"]
     for entry in version_history(env_id):
         vid = f"{name}-v{entry['version']}"
@@ -276,34 +278,50 @@ def _differences(config: Any) -> str:
     return ", ".join(changed) if changed else "nothing (this id is the defaults)"
 
 
-def _shipped_policy(env_id: str, recipe: str | None) -> list[str]:
+def _shipped_policy(env_id: str, recipes: Mapping[str, str]) -> list[str]:
+    """The section on the id's shipped policy: its own (v0), or the generalist's (every v1 layout id, and the
+    mix it was trained on); none for an id without one."""
     import yaml
 
-    path = ROOT / "models" / f"ppo_{env_id}_config.yaml"
-    if not path.is_file():
+    from ekfslam_gym.packaged import shipped_model
+
+    try:
+        model = shipped_model(env_id)
+    except ValueError:
         return []
-    record = yaml.safe_load(path.read_text())
-    entry = record["entry"]
+    record = yaml.safe_load(model.with_name(f"{model.stem}_config.yaml").read_text())
+    entry, trained_on = record["entry"], record["env_id"]
+    recipe = recipes.get(trained_on)
     rerun = (
-        f"in a checkout of the repository, `python train.py --config {recipe} --env-id {env_id} --seed "
+        f"in a checkout of the repository, `python train.py --config {recipe} --env-id {trained_on} --seed "
         f"{record['seed']}` trains it again"
         if recipe
         else "its training record is shipped beside it"
     )
+    if trained_on == env_id:
+        about = "Its env settings on top of this id's:"
+        picture = f"![the shipped policy on held-out seed 10001](../{model.stem}.gif)"
+    else:
+        about = (
+            f"It is the [generalist](../generalist.md), shipped for every v1 layout id: trained on "
+            f"`{trained_on}` (the training families only) and run here as it is, with its env settings on top of "
+            "this id's (the reward weights do not change what it does):"
+        )
+        picture = f"![the generalist on {GIF_ENV}, a held-out family, seed 10001](../{model.stem}.gif)"
     return [
         "## The shipped policy",
         "",
         f"`{entry.get('algo', 'ppo')}` with `{entry['policy']}`, trained for {entry['n_timesteps']:,} "
         f'decisions; `ekfslam_gym.load_pretrained("{env_id}")` loads it (the `train` extra) and '
-        "`agent.make_env()` builds the env it was trained on. Its env settings on top of this id's:",
+        "`agent.make_env()` builds the env it was trained on. " + about,
         "",
         "```yaml",
         _yaml(entry.get("env_kwargs", {})),
         "```",
         "",
-        f"![the shipped policy on held-out seed 10001](../ppo_{env_id}.gif)",
+        picture,
         "",
         f"How it was trained ({rerun}) and found: [Training](../training.md) and [the research "
-        "log](../research-log.md).",
+        f"log](../{'research-log' if trained_on == env_id else 'research-log-generalist'}.md).",
         "",
     ]

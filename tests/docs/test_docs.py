@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import importlib
 import io
+import math
 import re
 import subprocess
 import sys
@@ -346,8 +347,9 @@ def test_experiment_configs_load_and_are_indexed(config: Path) -> None:
 
 
 def test_scripts_in_docs_have_help() -> None:
-    """docs/generate.py, docs/stills.py and docs/comparison.py are runnable scripts with --help."""
-    for script in ("generate.py", "stills.py", "comparison.py"):
+    """docs/generate.py, docs/stills.py, docs/comparison.py and docs/generalist.py are runnable scripts with
+    --help."""
+    for script in ("generate.py", "stills.py", "comparison.py", "generalist.py"):
         out = io.StringIO()
         with contextlib.redirect_stdout(out), pytest.raises(SystemExit) as exit_:
             _help(DOCS / script)
@@ -393,3 +395,21 @@ def test_docs_page_is_generated_from_the_current_docstring():
     script = Path(__file__).resolve().parents[2] / "docs" / "generate.py"
     result = subprocess.run([sys.executable, str(script), "--check"], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
+
+
+def test_the_generalist_curve_times_a_checkpoint_from_its_run(tmp_path) -> None:
+    """docs/generalist.py: a run starts at its monitors' earliest t_start, and a process's CPU time at a moment is
+    interpolated between the sampler's lines (NaN for a process it never saw)."""
+    spec = importlib.util.spec_from_file_location("docs_generalist", DOCS / "generalist.py")
+    generalist = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generalist)
+    for name, start in (("0", 100.5), ("1", 99.0)):
+        path = tmp_path / "run" / "monitor" / "from_0" / f"{name}.monitor.csv"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(f'#{{"t_start": {start}, "env_id": "EKFSLAM-Mix-v1"}}\nr,l,t\n')
+    assert generalist.run_start(tmp_path / "run") == 99.0
+    log = tmp_path / "cpu.log"
+    log.write_text("100.0 7:10.0 8:1.0\n110.0 7:14.0 8:2.0\n")
+    assert generalist.cpu_at(log, 7, 105.0) == pytest.approx(12.0)
+    assert generalist.cpu_at(log, 8, 120.0) == pytest.approx(2.0)
+    assert math.isnan(generalist.cpu_at(log, 9, 105.0))

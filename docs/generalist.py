@@ -1,0 +1,203 @@
+"""The generalist's learning curves against wall-clock time (docs/generalist.md): every checkpoint of a training
+run evaluated on EKFSLAM-v1's evaluation seeds, beside the greedy and frontier planners on the same seeds.
+
+    python docs/generalist.py curve RUN [RUN ...] [--cpu-log FILE] [--seeds 20000-20009]   # evaluate, then plot
+    python docs/generalist.py plot                                                       # from the CSV only
+
+A checkpoint's wall-clock time is its file's modification time less the run's start (the ``t_start`` of its
+monitor files). With ``--cpu-log`` (lines ``<epoch> <pid>:<cpu-seconds> ...``, sampled while the runs trained,
+and ``--pid RUN=PID``), the run's own CPU time at that moment is interpolated too: on two cores shared by four
+runs, the wall-clock time is an upper bound and the CPU time is what one core alone would have taken. Evaluation
+seeds only (``ekfslam_gym.seeds.EVAL_SEEDS``): a figure for reporting, never for selecting.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+
+DOCS = Path(__file__).resolve().parent
+CSV = DOCS / "data" / "generalist_curve.csv"
+PNG = DOCS / "generalist_curve.png"
+ENV_ID = "EKFSLAM-v1"
+PLANNERS = ("greedy", "frontier")
+FIELDS = ("run", "steps", "wall_s", "cpu_s", "map_log_det", "lo", "hi", "landmark_rmse")
+CHECKPOINT = re.compile(r"ppo_(\d+)_steps\.zip")
+RUN_NAME = re.compile(
+    r"(scratch|bc)_s(\d+)"
+)  # runs/gen/<kind>_s<seed>, as the research log's commands name them
+KINDS = {"scratch": "from scratch", "bc": "the recipe: cloned, then PPO"}
+
+
+def legend(run: str) -> str:
+    """``scratch_s0`` -> "from scratch, seed 0"; other names as they are."""
+    match = RUN_NAME.fullmatch(run)
+    return f"{KINDS[match.group(1)]}, seed {match.group(2)}" if match else run
+
+
+def run_start(run: Path) -> float:
+    """The run's start, epoch seconds: the earliest ``t_start`` of its monitor files."""
+    starts = []
+    for path in (run / "monitor").rglob("*.monitor.csv"):
+        with path.open() as handle:
+            starts.append(json.loads(handle.readline().lstrip("#"))["t_start"])
+    if not starts:
+        raise SystemExit(f"{run}: no monitor files, so no start time")
+    return min(starts)
+
+
+def cpu_at(log: Path, pid: int, when: float) -> float:
+    """The CPU seconds of process ``pid`` at epoch ``when``, interpolated in the sampler's log."""
+    times, cpu = [], []
+    for line in log.read_text().splitlines():
+        stamp, *fields = line.split()
+        for field in fields:
+            owner, _, seconds = field.partition(":")
+            if int(owner) == pid:
+                times.append(float(stamp))
+                cpu.append(float(seconds))
+    if not times:
+        return float("nan")
+    return float(np.interp(when, times, cpu))
+
+
+def evaluate(agent, seeds: list[int], settings: dict) -> dict[str, float]:
+    """IQM [95 % CI] of the map log det and IQM landmark RMSE of ``agent`` on ``ENV_ID``'s ``seeds``."""
+    from ekfslam_gym.evaluation.aggregate import aggregate
+    from ekfslam_gym.evaluation.rollout import evaluate_agent
+
+    episodes = evaluate_agent(agent, ENV_ID, seeds, settings)
+    result = aggregate(episodes, ("map_log_det", "landmark_rmse"))
+    lo, hi = result["map_log_det"]["ci"]
+    return {
+        "map_log_det": result["map_log_det"]["iqm"],
+        "lo": lo,
+        "hi": hi,
+        "landmark_rmse": result["landmark_rmse"]["iqm"],
+    }
+
+
+def curve(runs: list[Path], seeds: list[int], cpu_log: Path | None, pids: dict[str, int]) -> list[dict]:
+    """One row per checkpoint of every run (its clone, for a cloned run, at 0 steps) and one per planner."""
+    from ekfslam_gym.agents import make_agent
+
+    from ekfslam_gym.benchmark.generalisation import zero_shot_settings
+
+    done = {
+        (r["run"], r["steps"]): r for r in read()
+    }  # rows of an earlier call are kept, not evaluated again
+    rows = []
+    for name in PLANNERS:
+        if (name, "") in done:
+            rows.append(done[(name, "")])
+            continue
+        rows.append({"run": name, "steps": "", "wall_s": "", "cpu_s": "",
+                     **evaluate(make_agent(name), seeds, {})})  # fmt: skip
+        print(f"{name}: {rows[-1]['map_log_det']:.1f}", file=sys.stderr)
+    for run in runs:
+        start = run_start(run)
+        models = [(0, run / "bc_model.zip")] if (run / "bc_model.zip").is_file() else []
+        models += sorted(
+            (int(m.group(1)), path)
+            for path in (run / "checkpoints").glob("ppo_*_steps.zip")
+            if (m := CHECKPOINT.fullmatch(path.name))
+        )
+        for steps, path in models:
+            if (run.name, str(steps)) in done:
+                rows.append(done[(run.name, str(steps))])
+                continue
+            agent = make_agent("ppo", model_path=path)
+            stamp = path.stat().st_mtime
+            pid = pids.get(run.name)
+            cpu = cpu_at(cpu_log, pid, stamp) if cpu_log is not None and pid is not None else float("nan")
+            rows.append({"run": run.name, "steps": steps, "wall_s": round(stamp - start, 1), "cpu_s": round(cpu, 1),
+                         **evaluate(agent, seeds, zero_shot_settings(agent.trained_env_kwargs))})  # fmt: skip
+            print(f"{run.name} {steps}: {rows[-1]['map_log_det']:.1f}", file=sys.stderr)
+    return rows
+
+
+def read() -> list[dict]:
+    """The CSV's rows as written (strings), or none."""
+    if not CSV.is_file():
+        return []
+    with CSV.open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def write(rows: list[dict]) -> None:
+    CSV.parent.mkdir(parents=True, exist_ok=True)
+    with CSV.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=FIELDS)
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in row.items()})
+
+
+def plot() -> None:
+    """docs/generalist_curve.png from the CSV: map log det against minutes, one line per run: the runs' CPU
+    time where the CSV has it for every checkpoint, else their wall-clock time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = read()
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    trained = [r for r in rows if r["steps"]]
+    clock = "cpu_s" if all(np.isfinite(float(r["cpu_s"])) for r in trained) else "wall_s"
+    for name in dict.fromkeys(r["run"] for r in trained):
+        mine = [r for r in rows if r["run"] == name]
+        minutes = np.array([float(r[clock]) for r in mine]) / 60
+        iqm = np.array([float(r["map_log_det"]) for r in mine])
+        lo = np.array([float(r["lo"]) for r in mine])
+        hi = np.array([float(r["hi"]) for r in mine])
+        (line,) = ax.plot(minutes, iqm, marker="o", markersize=3, label=legend(name))
+        ax.fill_between(minutes, lo, hi, color=line.get_color(), alpha=0.15)
+    for style, name in zip(("--", ":"), PLANNERS):
+        level = next(float(r["map_log_det"]) for r in rows if r["run"] == name)
+        ax.axhline(level, color="black", linestyle=style, linewidth=1, label=f"{name} planner")
+    ax.axvline(30, color="grey", linewidth=0.8, label="30 min")
+    ax.set_xlabel(
+        "minutes of the run's CPU time (its wall clock alone on one core)"
+        if clock == "cpu_s"
+        else "wall-clock minutes since the run started"
+    )
+    ax.set_ylabel(f"map log det on {ENV_ID} ↓\n(IQM, 95 % CI, evaluation seeds)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(PNG, dpi=110)
+    print(PNG)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    make = sub.add_parser("curve", help="evaluate every checkpoint of the runs, write the CSV, plot")
+    make.add_argument("runs", nargs="+", type=Path)
+    make.add_argument("--seeds", default="20000-20009")
+    make.add_argument("--cpu-log", type=Path)
+    make.add_argument("--pid", action="append", default=[], metavar="RUN=PID")
+    sub.add_parser("plot", help="plot the CSV")
+    args = parser.parse_args(argv)
+    if args.command == "curve":
+        import torch
+
+        from ekfslam_gym.seeds import check_not_held_out, parse_seeds
+
+        torch.set_num_threads(1)
+        seeds = check_not_held_out(parse_seeds(args.seeds), "the curve's seeds")
+        pids = {name: int(pid) for name, _, pid in (p.partition("=") for p in args.pid)}
+        write(curve(args.runs, seeds, args.cpu_log, pids))
+    plot()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
