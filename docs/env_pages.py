@@ -283,10 +283,10 @@ def _shipped_policy(env_id: str, recipes: Mapping[str, str]) -> list[str]:
     mix it was trained on); none for an id without one."""
     import yaml
 
-    from ekfslam_gym.packaged import shipped_model
+    from ekfslam_gym.pretrained import shipped_policy_file
 
     try:
-        model = shipped_model(env_id)
+        model = shipped_policy_file(env_id)
     except ValueError:
         return []
     record = yaml.safe_load(model.with_name(f"{model.stem}_config.yaml").read_text())

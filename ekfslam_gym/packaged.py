@@ -53,15 +53,11 @@ def shipped_env_ids() -> list[str]:
 
 
 def shipped_model(env_id: str) -> Path:
-    """``ppo_<env_id>.zip`` of the shipped policy for ``env_id`` (its statistics and record lie beside it); for
-    a v1 layout id without a file of its own (``ekfslam_gym.envs.presets.GENERALIST_IDS``), the generalist's,
-    ``ppo_EKFSLAM-Mix-v1.zip``: one policy for every layout."""
-    from .envs.presets import GENERALIST_IDS, MIX_ID
-
+    """``ppo_<env_id>.zip`` of the shipped policy file for ``env_id`` (its statistics and record lie beside it).
+    The policy an id is served by, the generalist's for a v1 layout id, is
+    ``ekfslam_gym.pretrained.shipped_policy_file``."""
     env_id = env_id.split(":")[-1]
     path = _folder(MODELS) / f"ppo_{env_id}.zip"
-    if not path.is_file() and env_id in GENERALIST_IDS:
-        path = _folder(MODELS) / f"ppo_{MIX_ID}.zip"
     if not path.is_file():
         raise ValueError(f"no shipped policy for {env_id!r}; shipped: {', '.join(shipped_env_ids())}")
     return path

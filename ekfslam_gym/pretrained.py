@@ -31,12 +31,28 @@ DEFAULT_ENV_ID = "EKFSLAM-v0"
 """The env of agents that name none (no training record)."""
 
 
+def shipped_policy_file(env_id: str) -> Path:
+    """The shipped policy that serves ``env_id``: its own file (``ppo_<env_id>.zip``), else, for a v1 layout id
+    (``ekfslam_gym.envs.presets.GENERALIST_IDS``), the generalist's, ``ppo_EKFSLAM-Mix-v1.zip``: one policy for
+    every layout. ValueError naming the shipped ones otherwise."""
+    from .envs.presets import GENERALIST_IDS, MIX_ID
+
+    env_id = env_id.split(":")[-1]
+    try:
+        return shipped_model(env_id)
+    except ValueError:
+        if env_id not in GENERALIST_IDS:
+            raise
+    return shipped_model(MIX_ID)
+
+
 def load_pretrained(env_id: str = "EKFSLAM-v0", **agent_kwargs: Any) -> Any:
-    """The shipped policy for ``env_id`` as a ``PPOAgent`` (deterministic; ``agent_kwargs`` go to it), its
-    env settings in ``trained_env_id`` / ``trained_env_kwargs`` and its env from ``agent.make_env()``."""
+    """The shipped policy for ``env_id`` (``shipped_policy_file``: the generalist for a v1 layout id) as a
+    ``PPOAgent`` (deterministic; ``agent_kwargs`` go to it), its env settings in ``trained_env_id`` /
+    ``trained_env_kwargs`` and its env from ``agent.make_env()``."""
     from ekfslam_gym.agents.ppo import PPOAgent
 
-    return PPOAgent(shipped_model(env_id), **agent_kwargs)
+    return PPOAgent(shipped_policy_file(env_id), **agent_kwargs)
 
 
 def model_env(path: str | Path) -> tuple[str, dict[str, Any]]:

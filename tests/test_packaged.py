@@ -169,15 +169,18 @@ def test_the_sweep_resolves_its_default_config_from_any_folder(tmp_path, monkeyp
 # ---------------------------------------------------------------------------------------------- the generalist
 def test_every_v1_layout_id_gets_the_generalist_and_nothing_else_does():
     from ekfslam_gym.envs.presets import FAMILY_IDS, GENERALIST_IDS, MIX_ID
+    from ekfslam_gym.pretrained import shipped_policy_file
 
     generalist = packaged.shipped_model(MIX_ID)
     assert set(GENERALIST_IDS) == {*FAMILY_IDS, "EKFSLAM-Large-v1"}
     for env_id in GENERALIST_IDS:
-        assert packaged.shipped_model(env_id) == generalist
-        assert packaged.shipped_model(f"ekfslam_gym:{env_id}") == generalist
-    assert packaged.shipped_model("EKFSLAM-Large-v0").name == "ppo_EKFSLAM-Large-v0.zip"  # v0 keeps its own
+        assert shipped_policy_file(env_id) == generalist
+        assert shipped_policy_file(f"ekfslam_gym:{env_id}") == generalist
+        with pytest.raises(ValueError, match=f"no shipped policy for '{env_id}'"):
+            packaged.shipped_model(env_id)  # the files: the generalist has one, not one per id
+    assert shipped_policy_file("EKFSLAM-Large-v0").name == "ppo_EKFSLAM-Large-v0.zip"  # v0 keeps its own
     with pytest.raises(ValueError, match="no shipped policy for 'EKFSLAM-Large-v2'"):
-        packaged.shipped_model("EKFSLAM-Large-v2")
+        shipped_policy_file("EKFSLAM-Large-v2")
 
 
 def test_a_policy_trained_on_the_mix_runs_on_every_v1_layout_id_and_only_there():

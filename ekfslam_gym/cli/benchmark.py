@@ -60,7 +60,7 @@ def _build_parser() -> argparse.ArgumentParser:
 def _factory(args: argparse.Namespace, parser: argparse.ArgumentParser) -> tuple[Any, str, list[str] | None]:
     """(make(env_id) -> (agent, env settings), the row's label, the env ids a model fixes or None)."""
     from ekfslam_gym.agents import AGENTS, is_agent_name, make_agent
-    from ekfslam_gym.packaged import shipped_model
+    from ekfslam_gym.pretrained import shipped_policy_file
 
     kwargs = args.agent_kwargs or {}
     if not isinstance(kwargs, dict):
@@ -77,7 +77,7 @@ def _factory(args: argparse.Namespace, parser: argparse.ArgumentParser) -> tuple
     if args.agent == "ppo":
 
         def shipped(env_id: str) -> tuple[Any, Any]:
-            agent = make_agent("ppo", model_path=shipped_model(env_id), **kwargs)
+            agent = make_agent("ppo", model_path=shipped_policy_file(env_id), **kwargs)
             return agent, agent.trained_env_kwargs
 
         return shipped, "ppo", None
@@ -114,12 +114,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     if label == "ppo":
         import torch
 
-        from ekfslam_gym.packaged import shipped_model
+        from ekfslam_gym.pretrained import shipped_policy_file
 
         torch.set_num_threads(1)
         for env_id in env_ids if model_ids is None else ():
             try:
-                shipped_model(env_id)
+                shipped_policy_file(env_id)
             except ValueError as error:
                 parser.error(f"--agent ppo: {error}")
     report = run(make, env_ids, label, quick=args.quick, progress=not args.no_progress)

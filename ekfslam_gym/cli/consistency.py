@@ -87,7 +87,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     from ekfslam_gym.agents import AGENTS, is_agent_name
     from ekfslam_gym.evaluation.rollout import merge_env_kwargs
-    from ekfslam_gym.packaged import shipped_model
+    from ekfslam_gym.pretrained import shipped_policy_file
 
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
     filters = [f.strip() for f in args.filters.split(",") if f.strip()]
@@ -99,7 +99,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error("--steps must be positive")
     if "ppo" in agents and not args.model:  # the shipped policy of the env id
         try:
-            args.model = str(shipped_model(args.env_id))
+            args.model = str(shipped_policy_file(args.env_id))
         except ValueError as error:
             parser.error(f"--agents ppo without --model: {error}")
     check_env_flags(parser, args.env_id, args.env_kwargs)

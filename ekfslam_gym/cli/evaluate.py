@@ -107,7 +107,7 @@ def _build_parser() -> argparse.ArgumentParser:
 def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) -> list[tuple[str, list[Any]]]:
     """(row label, agents whose episodes form that row); several agents in a row only for pooled PPO models."""
     from ekfslam_gym.agents import AGENTS, BASELINES, is_agent_name
-    from ekfslam_gym.packaged import shipped_model
+    from ekfslam_gym.pretrained import shipped_policy_file
 
     if args.compare:
         names = list(BASELINES) + (["ppo"] if args.model else [])
@@ -134,7 +134,7 @@ def _agent_entries(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
         if name == "ppo":
             if not args.model:  # the shipped policy of the env asked for
                 try:
-                    args.model = [str(shipped_model(args.env_id or DEFAULT_ENV_ID))]
+                    args.model = [str(shipped_policy_file(args.env_id or DEFAULT_ENV_ID))]
                 except ValueError as error:
                     parser.error(f"--agent ppo without --model: {error}")
             models = [agent_from_flags(parser, "ppo", kwargs, model=path) for path in args.model]
