@@ -29,10 +29,13 @@ ENV_ID = "EKFSLAM-v1"
 PLANNERS = ("greedy", "frontier")
 FIELDS = ("run", "steps", "wall_s", "cpu_s", "map_log_det", "lo", "hi", "landmark_rmse")
 CHECKPOINT = re.compile(r"ppo_(\d+)_steps\.zip")
-RUN_NAME = re.compile(
-    r"(scratch|bc)_s(\d+)"
-)  # runs/gen/<kind>_s<seed>, as the research log's commands name them
-KINDS = {"scratch": "from scratch", "bc": "the recipe: cloned, then PPO"}
+# runs/gen/<kind>_s<seed>, as the research log's commands name them
+RUN_NAME = re.compile(r"(scratch|scratchnopv|bc)_s(\d+)")
+KINDS = {
+    "scratch": "from scratch",
+    "scratchnopv": "from scratch, no pose-variance charge",
+    "bc": "the recipe: cloned, then PPO",
+}
 
 
 def legend(run: str) -> str:
