@@ -3,12 +3,20 @@ run evaluated on EKFSLAM-v1's evaluation seeds, beside the greedy and frontier p
 
     python docs/generalist.py curve RUN [RUN ...] [--cpu-log FILE] [--seeds 20000-20009]   # evaluate, then plot
     python docs/generalist.py plot                                                       # from the CSV only
+    python docs/generalist.py spread [--seeds 20000-20049]     # how far 10 seeds can move a landmark RMSE IQM
 
-A checkpoint's wall-clock time is its file's modification time less the run's start (the ``t_start`` of its
-monitor files). With ``--cpu-log`` (lines ``<epoch> <pid>:<cpu-seconds> ...``, sampled while the runs trained,
-and ``--pid RUN=PID``), the run's own CPU time at that moment is interpolated too: on two cores shared by four
-runs, the wall-clock time is an upper bound and the CPU time is what one core alone would have taken. Evaluation
-seeds only (``ekfslam_gym.seeds.EVAL_SEEDS``): a figure for reporting, never for selecting.
+A checkpoint's wall-clock time is its file's modification time less the run's start (the ``t_start`` of its monitor
+files); for a run continued with ``--resume``, the time of the checkpoint it resumed from plus the time since it
+resumed, so that the pause between is not counted. With ``--cpu-log`` (lines ``<epoch> <pid>:<cpu-seconds> ...``,
+sampled while the runs trained, and ``--pid RUN=PID``, the process of the run's last part), the run's own CPU time
+at that moment is interpolated too, added to that of the checkpoint a resumed part started from: on two cores shared
+by four runs, the wall-clock time is an upper bound and the CPU time is what one core alone would have taken.
+Evaluation seeds only (``ekfslam_gym.seeds.EVAL_SEEDS``): a figure for reporting, never for selecting.
+
+``spread`` runs the generalist and the frontier planner on every training family's evaluation seeds and asks how
+much one draw of 10 of those seeds (the generalisation suite's size in 0.3.0) moves a landmark RMSE IQM, and so
+how often 10 seeds rank the two agents the way all of them do (the episodes are cached in
+``docs/data/generalist_spread.csv``).
 """
 
 from __future__ import annotations
@@ -27,6 +35,9 @@ CSV = DOCS / "data" / "generalist_curve.csv"
 PNG = DOCS / "generalist_curve.png"
 ENV_ID = "EKFSLAM-v1"
 PLANNERS = ("greedy", "frontier")
+SPREAD_CSV = DOCS / "data" / "generalist_spread.csv"
+SPREAD_FIELDS = ("agent", "family", "seed", "map_log_det", "landmark_rmse")
+SPREAD_AGENTS = ("generalist", "frontier")
 FIELDS = ("run", "steps", "wall_s", "cpu_s", "map_log_det", "lo", "hi", "landmark_rmse")
 CHECKPOINT = re.compile(r"ppo_(\d+)_steps\.zip")
 # runs/gen/<kind>_s<seed>, as the research log's commands name them
@@ -44,15 +55,36 @@ def legend(run: str) -> str:
     return f"{KINDS[match.group(1)]}, seed {match.group(2)}" if match else run
 
 
-def run_start(run: Path) -> float:
-    """The run's start, epoch seconds: the earliest ``t_start`` of its monitor files."""
+def first_start(folder: Path) -> float:
+    """The earliest ``t_start`` of the monitor files under ``folder``, epoch seconds."""
     starts = []
-    for path in (run / "monitor").rglob("*.monitor.csv"):
+    for path in folder.rglob("*.monitor.csv"):
         with path.open() as handle:
             starts.append(json.loads(handle.readline().lstrip("#"))["t_start"])
     if not starts:
-        raise SystemExit(f"{run}: no monitor files, so no start time")
+        raise SystemExit(f"{folder}: no monitor files, so no start time")
     return min(starts)
+
+
+def run_start(run: Path) -> float:
+    """The run's start, epoch seconds: the earliest ``t_start`` of its monitor files."""
+    return first_start(run / "monitor")
+
+
+def run_starts(run: Path) -> dict[int, float]:
+    """When each part of a run started, by the step count it started from: ``{0: start}``, plus one entry per
+    ``--resume`` (a resumed part writes its monitor files to ``monitor/from_<steps>``)."""
+    starts = {int(folder.name.removeprefix("from_")): first_start(folder)
+              for folder in (run / "monitor").glob("from_*")}  # fmt: skip
+    if 0 not in starts:
+        raise SystemExit(f"{run}: no monitor/from_0, so no start time")
+    return starts
+
+
+def part_of(starts: dict[int, float], steps: int) -> int:
+    """The step count the part of a run that wrote the checkpoint at ``steps`` started from (``run_starts``'s
+    keys): a checkpoint a part resumed from was written by the part before it."""
+    return max((start for start in starts if start < steps), default=0)
 
 
 def cpu_at(log: Path, pid: int, when: float) -> float:
@@ -104,7 +136,8 @@ def curve(runs: list[Path], seeds: list[int], cpu_log: Path | None, pids: dict[s
                      **evaluate(make_agent(name), seeds, {})})  # fmt: skip
         print(f"{name}: {rows[-1]['map_log_det']:.1f}", file=sys.stderr)
     for run in runs:
-        start = run_start(run)
+        starts = run_starts(run)
+        clock: dict[int, tuple[float, float]] = {}  # steps -> (wall s, CPU s) since the run began
         models = [(0, run / "bc_model.zip")] if (run / "bc_model.zip").is_file() else []
         models += sorted(
             (int(m.group(1)), path)
@@ -114,12 +147,19 @@ def curve(runs: list[Path], seeds: list[int], cpu_log: Path | None, pids: dict[s
         for steps, path in models:
             if (run.name, str(steps)) in done:
                 rows.append(done[(run.name, str(steps))])
+                clock[steps] = (float(rows[-1]["wall_s"]), float(rows[-1]["cpu_s"] or "nan"))
                 continue
+            origin = part_of(starts, steps)
+            if origin and origin not in clock:
+                raise SystemExit(f"{run}: resumed from {origin} steps, but that checkpoint is missing")
+            wall0, cpu0 = clock[origin] if origin else (0.0, 0.0)
             agent = make_agent("ppo", model_path=path)
             stamp = path.stat().st_mtime
             pid = pids.get(run.name)
             cpu = cpu_at(cpu_log, pid, stamp) if cpu_log is not None and pid is not None else float("nan")
-            rows.append({"run": run.name, "steps": steps, "wall_s": round(stamp - start, 1), "cpu_s": round(cpu, 1),
+            clock[steps] = (wall0 + stamp - starts[origin], cpu0 + cpu)
+            rows.append({"run": run.name, "steps": steps, "wall_s": round(clock[steps][0], 1),
+                         "cpu_s": round(clock[steps][1], 1),
                          **evaluate(agent, seeds, zero_shot_settings(agent.trained_env_kwargs))})  # fmt: skip
             print(f"{run.name} {steps}: {rows[-1]['map_log_det']:.1f}", file=sys.stderr)
     return rows
@@ -179,6 +219,91 @@ def plot() -> None:
     print(PNG)
 
 
+def iqm(values: np.ndarray, axis: int = -1) -> np.ndarray:
+    """The interquartile mean along ``axis`` (scipy's 25 % trimmed mean, as ``ekfslam_gym.evaluation``)."""
+    from scipy.stats import trim_mean
+
+    return trim_mean(values, 0.25, axis=axis)
+
+
+def draws_of(
+    values: dict[str, np.ndarray], size: int, draws: int, rng: np.random.Generator
+) -> dict[str, np.ndarray]:
+    """The IQM of each agent's ``values`` (one per seed, the same seeds in the same order for every agent) over
+    ``draws`` random subsets of ``size`` seeds, the same subsets for every agent: one array of ``draws`` each."""
+    count = len(next(iter(values.values())))
+    picks = np.array([rng.choice(count, size, replace=False) for _ in range(draws)])
+    return {agent: iqm(np.asarray(v)[picks]) for agent, v in values.items()}
+
+
+def spread_episodes(seeds: list[int]) -> list[dict]:
+    """Every (agent, training family, seed) episode's map log det and landmark RMSE: the cached rows, and those
+    missing run now (the family's id at its default tier)."""
+    from ekfslam_gym.agents import make_agent
+
+    from ekfslam_gym.benchmark.generalisation import zero_shot_settings
+    from ekfslam_gym.envs.presets import family_id
+    from ekfslam_gym.evaluation.rollout import evaluate_agent
+    from ekfslam_gym.pretrained import shipped_policy_file
+    from ekfslam_gym.seeds import TRAINING_FAMILIES
+
+    cached = []
+    if SPREAD_CSV.is_file():
+        with SPREAD_CSV.open(newline="") as handle:
+            cached = list(csv.DictReader(handle))
+    have = {(r["agent"], r["family"], int(r["seed"])): r for r in cached}
+    rows = []
+    for name in SPREAD_AGENTS:
+        if name == "generalist":
+            agent = make_agent("ppo", model_path=shipped_policy_file("EKFSLAM-Mix-v1"))
+            settings = zero_shot_settings(agent.trained_env_kwargs)
+        else:
+            agent, settings = make_agent(name), {}
+        for family in TRAINING_FAMILIES:
+            missing = [seed for seed in seeds if (name, family, seed) not in have]
+            episodes = evaluate_agent(agent, family_id(family), missing, settings) if missing else []
+            for seed, episode in zip(missing, episodes):
+                have[(name, family, seed)] = {"agent": name, "family": family, "seed": seed,
+                                              **{k: episode[k] for k in SPREAD_FIELDS[3:]}}  # fmt: skip
+            rows += [have[(name, family, seed)] for seed in seeds]
+            print(f"{name} {family}: {len(missing)} run, {len(seeds) - len(missing)} cached", file=sys.stderr)
+    SPREAD_CSV.parent.mkdir(parents=True, exist_ok=True)
+    with SPREAD_CSV.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=SPREAD_FIELDS)
+        writer.writeheader()
+        writer.writerows(rows)
+    return rows
+
+
+def spread(rows: list[dict], size: int = 10, draws: int = 2000, seed: int = 0) -> str:
+    """The Markdown table of ``spread``: per training family, each agent's landmark RMSE IQM over all its seeds,
+    the frontier's over draws of ``size`` seeds (5th-95th percentile), and the share of draws in which the
+    generalist's is at or below the frontier's, on that family and on every family at once."""
+    rng = np.random.default_rng(seed)
+    families = list(dict.fromkeys(r["family"] for r in rows))
+    lines = [
+        f"| family | generalist, all {{n}} seeds | frontier, all {{n}} | frontier, {size} seeds (5-95 %) | "
+        f"generalist at or below, {size} seeds |",
+        "|---|---|---|---|---|",
+    ]
+    every = np.ones(draws, dtype=bool)
+    for family in families:
+        values = {}
+        for agent in SPREAD_AGENTS:
+            mine = sorted((int(r["seed"]), float(r["landmark_rmse"])) for r in rows
+                          if r["agent"] == agent and r["family"] == family)  # fmt: skip
+            values[agent] = np.array([v for _, v in mine])
+        drawn = draws_of(values, size, draws, rng)
+        below = drawn["generalist"] <= drawn["frontier"]
+        every &= below
+        lo, hi = np.percentile(drawn["frontier"], [5, 95])
+        lines.append(f"| {family} | {iqm(values['generalist']):.3f} | {iqm(values['frontier']):.3f} | "
+                     f"{lo:.3f}-{hi:.3f} | {below.mean():.0%} |")  # fmt: skip
+    lines.append(f"| every family at once | | | | {every.mean():.1%} |")
+    count = len(values["frontier"])
+    return "\n".join(lines).replace("{n}", str(count)) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -188,14 +313,20 @@ def main(argv: list[str] | None = None) -> int:
     make.add_argument("--cpu-log", type=Path)
     make.add_argument("--pid", action="append", default=[], metavar="RUN=PID")
     sub.add_parser("plot", help="plot the CSV")
+    spreading = sub.add_parser("spread", help="how much 10 seeds move a landmark RMSE IQM")
+    spreading.add_argument("--seeds", default="20000-20049")
     args = parser.parse_args(argv)
-    if args.command == "curve":
+    if args.command in ("curve", "spread"):
         import torch
 
         from ekfslam_gym.seeds import check_not_held_out, parse_seeds
 
         torch.set_num_threads(1)
-        seeds = check_not_held_out(parse_seeds(args.seeds), "the curve's seeds")
+        seeds = check_not_held_out(parse_seeds(args.seeds), f"the {args.command}'s seeds")
+    if args.command == "spread":
+        print(spread(spread_episodes(seeds)), end="")
+        return 0
+    if args.command == "curve":
         pids = {name: int(pid) for name, _, pid in (p.partition("=") for p in args.pid)}
         write(curve(args.runs, seeds, args.cpu_log, pids))
     plot()

@@ -48,8 +48,11 @@ ARROWS = {
     "collisions": " ↓",
 }
 """Which way is better, for the table's header (path length is neither: it is what the map cost)."""
-SEEDS_PER_CASE = 10
-"""Seeds per case in a full run: the first of each case's held-out seeds."""
+SEEDS_PER_CASE = 50
+"""Seeds per case in a full run: the first of each case's held-out seeds, all 50 of them, as the v0 benchmark
+runs. At 10 a case, the frontier planner's landmark RMSE IQM on one training family's evaluation seeds ranged
+over a factor of 2.2-2.8 from one draw of 10 seeds to another (5th to 95th percentile; ``docs/generalist.py
+spread``): too wide to rank two agents by accuracy on one id."""
 QUICK_EPISODE_TIME = 2.0
 """s of simulated time per episode in a ``--quick`` run (one seed per case)."""
 LAYOUT_IDS: tuple[str, ...] = ("EKFSLAM-Large-v1",)
@@ -280,8 +283,9 @@ def about(rows: Sequence[Mapping[str, Any]], quick: bool, seeds_per_case: int) -
         "episodes): "
         f"{seeds_per_case} held-out seed(s) per env, the first of each env's held-out seeds "
         f"(`ekfslam_gym.seeds`), {len(agents)} agents, every episode its id's full horizon at the default tier "
-        "(medium); IQM [95 % bootstrap CI] over the episodes. The shipped policies, each trained on one v0 id, run "
-        "zero-shot with the action interface and observation settings they were trained with. "
+        "(medium); IQM [95 % bootstrap CI] over the episodes. The shipped policies, each trained on one v0 id or, "
+        "the generalist (`ppo EKFSLAM-Mix-v1`), on the training families' mix, run zero-shot with the action "
+        "interface and observation settings they were trained with. "
         "`time_to_complete` is the simulated time (s) until every landmark's sigma was below `done_std` (the "
         "episode's length if never); `collisions` counts control steps in contact with a wall; `path_length` "
         "is in m. Per-episode rows: `generalisation.csv`."

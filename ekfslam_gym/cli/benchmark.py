@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from ..benchmark import QUICK_EPISODES, markdown, reference_rows, run
+from ..benchmark.generalisation import SEEDS_PER_CASE
 from ..seeds import HELD_OUT
 from .common import command_line, command_parser, json_object
 
@@ -53,7 +54,7 @@ def _build_parser() -> argparse.ArgumentParser:
                              "training families' held-out seeds and the held-out families (no --agent; --out "
                              "DIR keeps a CSV of the episodes, and a run stopped early resumes from it)")  # fmt: skip
     parser.add_argument("--suite-seeds", type=int, default=None,
-                        help="held-out seeds per env of the suite (default 10; --quick: 1)")  # fmt: skip
+                        help=f"held-out seeds per env of the suite (default {SEEDS_PER_CASE}; --quick: 1)")  # fmt: skip
     return parser
 
 

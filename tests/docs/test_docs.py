@@ -21,6 +21,7 @@ import sys
 from functools import cache
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -408,8 +409,47 @@ def test_the_generalist_curve_times_a_checkpoint_from_its_run(tmp_path) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(f'#{{"t_start": {start}, "env_id": "EKFSLAM-Mix-v1"}}\nr,l,t\n')
     assert generalist.run_start(tmp_path / "run") == 99.0
+    resumed = tmp_path / "run" / "monitor" / "from_300" / "0.monitor.csv"
+    resumed.parent.mkdir()
+    resumed.write_text('#{"t_start": 5000.0, "env_id": "EKFSLAM-Mix-v1"}\nr,l,t\n')
+    starts = generalist.run_starts(tmp_path / "run")
+    assert starts == {0: 99.0, 300: 5000.0}
+    assert [generalist.part_of(starts, steps) for steps in (0, 20, 300, 320)] == [0, 0, 0, 300]
     log = tmp_path / "cpu.log"
     log.write_text("100.0 7:10.0 8:1.0\n110.0 7:14.0 8:2.0\n")
     assert generalist.cpu_at(log, 7, 105.0) == pytest.approx(12.0)
     assert generalist.cpu_at(log, 8, 120.0) == pytest.approx(2.0)
     assert math.isnan(generalist.cpu_at(log, 9, 105.0))
+
+
+def test_the_generalist_spread_draws_the_same_seeds_for_both_agents() -> None:
+    """docs/generalist.py spread: an agent a constant above the other on every seed is above it in every draw
+    (the draws pair the seeds), an agent equal to it is at or below it in every draw, and the IQM is numpy's on
+    the middle half."""
+    spec = importlib.util.spec_from_file_location("docs_generalist", DOCS / "generalist.py")
+    generalist = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generalist)
+    assert generalist.iqm(np.arange(8.0)) == pytest.approx(np.mean([2.0, 3.0, 4.0, 5.0]))
+    frontier = np.random.default_rng(1).lognormal(-3.0, 0.8, 50)
+    drawn = generalist.draws_of(
+        {"generalist": frontier + 0.01, "frontier": frontier}, 10, 500, np.random.default_rng(2)
+    )
+    assert drawn["frontier"].shape == (500,)
+    assert np.allclose(drawn["generalist"] - drawn["frontier"], 0.01)
+    assert np.ptp(drawn["frontier"]) > 0.01  # the draws differ from each other
+
+    def rows(gap: float) -> list[dict]:
+        return [
+            {
+                "agent": agent,
+                "family": family,
+                "seed": seed,
+                "landmark_rmse": value + (gap if agent == "generalist" else 0),
+            }
+            for family in ("arena", "maze")
+            for agent in ("generalist", "frontier")
+            for seed, value in enumerate(frontier)
+        ]
+
+    assert generalist.spread(rows(0.0), draws=200).splitlines()[-1].endswith("| 100.0% |")
+    assert generalist.spread(rows(0.01), draws=200).splitlines()[-1].endswith("| 0.0% |")
