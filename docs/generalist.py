@@ -66,11 +66,6 @@ def first_start(folder: Path) -> float:
     return min(starts)
 
 
-def run_start(run: Path) -> float:
-    """The run's start, epoch seconds: the earliest ``t_start`` of its monitor files."""
-    return first_start(run / "monitor")
-
-
 def run_starts(run: Path) -> dict[int, float]:
     """When each part of a run started, by the step count it started from: ``{0: start}``, plus one entry per
     ``--resume`` (a resumed part writes its monitor files to ``monitor/from_<steps>``)."""
@@ -219,21 +214,16 @@ def plot() -> None:
     print(PNG)
 
 
-def iqm(values: np.ndarray, axis: int = -1) -> np.ndarray:
-    """The interquartile mean along ``axis`` (scipy's 25 % trimmed mean, as ``ekfslam_gym.evaluation``)."""
-    from scipy.stats import trim_mean
-
-    return trim_mean(values, 0.25, axis=axis)
-
-
 def draws_of(
     values: dict[str, np.ndarray], size: int, draws: int, rng: np.random.Generator
 ) -> dict[str, np.ndarray]:
     """The IQM of each agent's ``values`` (one per seed, the same seeds in the same order for every agent) over
     ``draws`` random subsets of ``size`` seeds, the same subsets for every agent: one array of ``draws`` each."""
+    from ekfslam_gym.evaluation.metrics import iqm
+
     count = len(next(iter(values.values())))
     picks = np.array([rng.choice(count, size, replace=False) for _ in range(draws)])
-    return {agent: iqm(np.asarray(v)[picks]) for agent, v in values.items()}
+    return {agent: np.array([iqm(draw) for draw in np.asarray(v)[picks]]) for agent, v in values.items()}
 
 
 def spread_episodes(seeds: list[int]) -> list[dict]:
@@ -279,6 +269,8 @@ def spread(rows: list[dict], size: int = 10, draws: int = 2000, seed: int = 0) -
     """The Markdown table of ``spread``: per training family, each agent's landmark RMSE IQM over all its seeds,
     the frontier's over draws of ``size`` seeds (5th-95th percentile), and the share of draws in which the
     generalist's is at or below the frontier's, on that family and on every family at once."""
+    from ekfslam_gym.evaluation.metrics import iqm
+
     rng = np.random.default_rng(seed)
     families = list(dict.fromkeys(r["family"] for r in rows))
     lines = [

@@ -408,7 +408,7 @@ def test_the_generalist_curve_times_a_checkpoint_from_its_run(tmp_path) -> None:
         path = tmp_path / "run" / "monitor" / "from_0" / f"{name}.monitor.csv"
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(f'#{{"t_start": {start}, "env_id": "EKFSLAM-Mix-v1"}}\nr,l,t\n')
-    assert generalist.run_start(tmp_path / "run") == 99.0
+    assert generalist.run_starts(tmp_path / "run") == {0: 99.0}  # the earliest t_start of its monitors
     resumed = tmp_path / "run" / "monitor" / "from_300" / "0.monitor.csv"
     resumed.parent.mkdir()
     resumed.write_text('#{"t_start": 5000.0, "env_id": "EKFSLAM-Mix-v1"}\nr,l,t\n')
@@ -424,12 +424,15 @@ def test_the_generalist_curve_times_a_checkpoint_from_its_run(tmp_path) -> None:
 
 def test_the_generalist_spread_draws_the_same_seeds_for_both_agents() -> None:
     """docs/generalist.py spread: an agent a constant above the other on every seed is above it in every draw
-    (the draws pair the seeds), an agent equal to it is at or below it in every draw, and the IQM is numpy's on
-    the middle half."""
+    (the draws pair the seeds), an agent equal to it is at or below it in every draw, and a draw's IQM is the
+    mean of its middle half."""
     spec = importlib.util.spec_from_file_location("docs_generalist", DOCS / "generalist.py")
     generalist = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(generalist)
-    assert generalist.iqm(np.arange(8.0)) == pytest.approx(np.mean([2.0, 3.0, 4.0, 5.0]))
+    whole = generalist.draws_of({"a": np.arange(8.0)}, 8, 1, np.random.default_rng(0))["a"]
+    assert whole == pytest.approx(
+        [np.mean([2.0, 3.0, 4.0, 5.0])]
+    )  # a draw of every seed: its middle half's mean
     frontier = np.random.default_rng(1).lognormal(-3.0, 0.8, 50)
     drawn = generalist.draws_of(
         {"generalist": frontier + 0.01, "frontier": frontier}, 10, 500, np.random.default_rng(2)
