@@ -4,7 +4,9 @@ Baselines: ``random`` (uniform actions), ``circle`` (a fixed circle, a sanity fl
 coverage sweep of the world's bounds), ``greedy`` (D-optimal information gain over motion primitives, the
 classic active-SLAM baseline; ``greedy2`` is the same planner looking two primitives ahead), ``frontier``
 (nearest-frontier exploration, Yamauchi 1997, the exploration literature's baseline), and ``ppo`` (a saved
-stable-baselines3 policy; needs the ``train`` extra).
+stable-baselines3 policy; needs the ``train`` extra). These act in the ``velocity`` interface (``ppo`` in the one
+it was trained in); ``greedy-primitives``, ``frontier-primitives`` and ``frontier-waypoint`` are the planners that
+demonstrate for behaviour cloning, acting in the interface their names end with.
 ``make_agent(name, **kwargs)`` builds one by name, as ``ekfslam-evaluate --agent NAME`` does; a
 name of the form ``module:Class`` (or ``module:function``, a factory) builds a user's own agent, any object with
 ``reset(env, seed)`` and ``act(observation)`` (docs/writing-an-agent.md). What ``act`` returns is declared by
@@ -25,8 +27,9 @@ from typing import Any
 from . import _name_guard  # noqa: F401  (first: refuses the name `agents`)
 from .base import ActionKind, Agent, clip_action, wall_scan
 from .baselines import CircleAgent, LawnmowerAgent, RandomAgent
-from .frontier import FrontierAgent
+from .frontier import FrontierAgent, FrontierPrimitivesPlanner, FrontierWaypointPlanner
 from .greedy import GreedyInfoGainAgent, GreedyLookaheadAgent
+from .planners import GreedyPrimitivesPlanner
 from .ppo import PPOAgent
 
 AGENTS: dict[str, type[Agent]] = {
@@ -37,6 +40,11 @@ AGENTS: dict[str, type[Agent]] = {
     "greedy2": GreedyLookaheadAgent,
     "frontier": FrontierAgent,
     "ppo": PPOAgent,
+    # The demonstration planners by their own names, each acting in the macro interface its name ends with: it
+    # needs an env of that action.kind (``--env-kwargs '{"action": {"kind": "primitives"}}'``).
+    "greedy-primitives": GreedyPrimitivesPlanner,
+    "frontier-primitives": FrontierPrimitivesPlanner,
+    "frontier-waypoint": FrontierWaypointPlanner,
 }
 BASELINES: tuple[str, ...] = ("random", "circle", "lawnmower", "greedy", "frontier")
 
@@ -103,8 +111,11 @@ __all__ = [
     "Agent",
     "CircleAgent",
     "FrontierAgent",
+    "FrontierPrimitivesPlanner",
+    "FrontierWaypointPlanner",
     "GreedyInfoGainAgent",
     "GreedyLookaheadAgent",
+    "GreedyPrimitivesPlanner",
     "LawnmowerAgent",
     "PPOAgent",
     "RandomAgent",

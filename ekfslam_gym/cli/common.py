@@ -34,7 +34,10 @@ from typing import Any, NoReturn
 
 from .. import seeds
 
-AGENT_NAMES: tuple[str, ...] = ("random", "circle", "lawnmower", "greedy", "greedy2", "frontier", "ppo")
+AGENT_NAMES: tuple[str, ...] = (
+    "random", "circle", "lawnmower", "greedy", "greedy2", "frontier", "ppo",
+    "greedy-primitives", "frontier-primitives", "frontier-waypoint",
+)  # fmt: skip
 """The names ``ekfslam_gym.agents.AGENTS`` registers, for the parsers' help: importing the agents (numba, SciPy)
 would triple a ``--help``'s time. tests/cli/test_command_lines.py holds the two equal."""
 
@@ -107,6 +110,30 @@ def command_line(command: str, prog: str | None = None) -> Callable[[Callable[..
         return guarded
 
     return decorate
+
+
+def check_agent_interface(
+    parser: argparse.ArgumentParser, label: str, agent: Any, env_id: str, env_kwargs: Mapping[str, Any] | None
+) -> None:
+    """Refuse, against ``--agent``, an agent that acts in another interface than the env it would run in (a
+    velocity command would be read as a waypoint goal without a word), naming the agents that act in the
+    env's. ``ekfslam_gym.evaluation.rollout.check_action_kind`` says the same to a library caller."""
+    import gymnasium as gym
+
+    from ekfslam_gym.agents import AGENTS
+    from ekfslam_gym.evaluation.rollout import check_action_kind
+
+    env = gym.make(env_id, **dict(env_kwargs or {}))
+    try:
+        check_action_kind(agent, env)
+    except ValueError as error:
+        kind = env.unwrapped.config.action.kind
+        fitting = [name for name, cls in AGENTS.items() if name != "ppo" and str(cls.action_kind) == kind]
+        parser.error(
+            f"--agent {label}: {error_message(error)} ({', '.join(fitting)}, or a policy trained in it)"
+        )
+    finally:
+        env.close()
 
 
 def json_object(text: str) -> dict[str, Any]:

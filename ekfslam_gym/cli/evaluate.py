@@ -39,6 +39,7 @@ from ..seeds import EVAL_SEEDS, HELD_OUT, SUITES, span, suite_name
 from .common import (
     AGENT_NAMES,
     agent_from_flags,
+    check_agent_interface,
     check_env_flags,
     command_line,
     command_parser,
@@ -175,8 +176,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as error:
         parser.error(str(error))
     check_env_flags(parser, args.env_id, args.env_kwargs)
-    for _, agent_list in entries:
+    for label, agent_list in entries:
         for agent in agent_list:
+            check_agent_interface(
+                parser,
+                label,
+                agent,
+                args.env_id,
+                merge_env_kwargs(getattr(agent, "trained_env_kwargs", None), args.env_kwargs),
+            )
             trained_kwargs = getattr(agent, "trained_env_kwargs", None)
             if trained_kwargs is not None:
                 evaluated = merge_env_kwargs(trained_kwargs, args.env_kwargs)

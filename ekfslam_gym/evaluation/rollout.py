@@ -69,6 +69,21 @@ def merge_env_kwargs(
     return merged
 
 
+def check_action_kind(agent: Any, env: gym.Env) -> None:
+    """ValueError when ``agent`` declares an action interface (``action_kind``, as ``ekfslam_gym.agents.Agent``
+    does) other than the env's ``action.kind``. A velocity command and a waypoint goal are both two floats in
+    [-1, 1], so the env would take one for the other without a word and the episode would score some other
+    agent. An agent that declares nothing (None, or no attribute: a user's own) is taken at its word."""
+    declared = getattr(agent, "action_kind", None)
+    kind = env.unwrapped.config.action.kind
+    if declared is not None and str(declared) != kind:
+        name = getattr(agent, "name", type(agent).__name__)
+        raise ValueError(
+            f"agent {name!r} acts in action.kind {str(declared)!r} and this env takes {kind!r} actions; run it in "
+            f"an env of action.kind {str(declared)!r}, or give an agent that acts in {kind!r}"
+        )
+
+
 def run_episode(
     env: gym.Env,
     agent: Any,
@@ -87,6 +102,7 @@ def run_episode(
     """
     observation, info = env.reset(seed=seed)
     agent.reset(env, seed=seed)
+    check_action_kind(agent, env)
     if recording is not None:
         recording.add(info, first=True)
     if frames is not None:

@@ -68,7 +68,15 @@ def test_every_planner_returns_actions_of_the_kind_it_declares(name, kind):
 
 def test_the_planners_interfaces_are_read_from_their_declarations():
     assert PLANNERS == {"greedy": ("primitives",), "frontier": ("waypoint", "primitives")}
-    assert all(cls.action_kind is ActionKind.VELOCITY for name, cls in AGENTS.items() if name != "ppo")
+    # every registered agent acts in velocity but the policy and the planners, named by their own interface
+    planners = {cls.name: cls for classes in PLANNER_CLASSES.values() for cls in classes}
+    assert {name: AGENTS[name] for name in planners} == planners
+    assert all(str(cls.action_kind) == name.rpartition("-")[2] for name, cls in planners.items())
+    assert all(
+        cls.action_kind is ActionKind.VELOCITY
+        for name, cls in AGENTS.items()
+        if name not in {"ppo", *planners}
+    )
     with pytest.raises(ValueError, match="demonstrates in action.kind primitives, not 'waypoint'"):
         make_planner("greedy", "waypoint")
     with pytest.raises(ValueError, match="unknown demonstration planner"):
@@ -100,7 +108,8 @@ def test_planners_run_in_the_other_layouts(name, env_id):
 
 
 def test_make_agent_knows_every_agent_and_rejects_others():
-    assert set(BASELINES) | {"ppo", "greedy2"} == set(AGENTS)
+    planners = {cls.name for classes in PLANNER_CLASSES.values() for cls in classes}
+    assert set(BASELINES) | {"ppo", "greedy2"} | planners == set(AGENTS)
     assert isinstance(make_agent("circle", radius=2.0), CircleAgent)
     with pytest.raises(ValueError, match="unknown agent"):
         make_agent("teleport")

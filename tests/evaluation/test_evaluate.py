@@ -144,3 +144,47 @@ def test_env_kwargs_go_on_top_of_the_training_record_section_by_section():
     assert trained["filter"] == {"motion_model": "odometry", "pose_prior": 1e-6}  # the record is left alone
     assert merge_env_kwargs(None, None) == {}
     assert merge_env_kwargs({"filter": {"variant": "ekf"}}, {"filter": None}) == {"filter": None}
+
+
+@pytest.mark.parametrize("kind", ["waypoint", "primitives"])
+def test_an_agent_is_refused_in_an_interface_it_does_not_act_in(kind, capsys):
+    # A velocity command is two floats in [-1, 1], as a waypoint goal is: without the check the waypoint env
+    # drove the frontier agent's commands as goals and reported another agent's episode.
+    env_kwargs = json.dumps({"action": {"kind": kind}})
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--agent", "frontier", "--env-kwargs", env_kwargs, *SHORT])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "--agent frontier: agent 'frontier' acts in action.kind 'velocity'" in err
+    assert f"frontier-{kind}" in err and "lawnmower" not in err  # the agents that do act in it
+    with pytest.raises(ValueError, match=f"this env takes '{kind}' actions"):
+        evaluate_agent(
+            make_agent("frontier"), "EKFSLAM-v0", [0], {"action": {"kind": kind}}, max_episode_steps=2
+        )
+
+
+class _Undeclared:
+    """A user's own agent that declares no interface: taken at its word."""
+
+    def reset(self, env, seed=None):
+        self.space = env.action_space
+
+    def act(self, observation):
+        return self.space.sample()
+
+
+def test_the_planners_run_by_name_in_their_own_interface(capsys):
+    argv = [
+        "--agent",
+        "frontier-primitives,greedy-primitives",
+        "--env-kwargs",
+        '{"action": {"kind": "primitives"}}',
+    ]
+    assert main([*argv, "--json", "--seeds", "0", "--max-episode-steps", "3", "--no-progress"]) == 0
+    obj = json.loads(capsys.readouterr().out)
+    assert list(obj) == ["frontier-primitives", "greedy-primitives"]
+    assert all(entry["metrics"]["path_length"]["iqm"] > 0 for entry in obj.values())
+    rows = evaluate_agent(
+        _Undeclared(), "EKFSLAM-v0", [0], {"action": {"kind": "primitives"}}, max_episode_steps=2
+    )
+    assert rows[0]["steps"] == 2
