@@ -4,6 +4,7 @@ run evaluated on EKFSLAM-v1's evaluation seeds, beside the greedy and frontier p
     python docs/generalist.py curve RUN [RUN ...] [--cpu-log FILE] [--seeds 20000-20009]   # evaluate, then plot
     python docs/generalist.py plot                                                       # from the CSV only
     python docs/generalist.py spread [--seeds 20000-20049]     # how far 10 seeds can move a landmark RMSE IQM
+    python docs/generalist.py interfaces [--seeds 20000-20049] # one planner through every action interface
 
 A checkpoint's wall-clock time is its file's modification time less the run's start (the ``t_start`` of its monitor
 files); for a run continued with ``--resume``, the time of the checkpoint it resumed from plus the time since it
@@ -17,6 +18,12 @@ Evaluation seeds only (``ekfslam_gym.seeds.EVAL_SEEDS``): a figure for reporting
 much one draw of 10 of those seeds (the generalisation suite's size in 0.3.0) moves a landmark RMSE IQM, and so
 how often 10 seeds rank the two agents the way all of them do (the episodes are cached in
 ``docs/data/generalist_spread.csv``).
+
+``interfaces`` runs the one nearest-frontier planner through each action interface (velocity, primitives, the
+teacher's primitives growing the map outwards, primitives held 3 control steps, waypoints) and the generalist on
+the same evaluation seeds, and tables each one's map log det, landmark RMSE, the RMSE its own filter expects
+(sqrt of the mean of tr Sigma_jj over the seen landmarks, at the end) and path length (episodes cached in
+``docs/data/generalist_interfaces.csv``).
 """
 
 from __future__ import annotations
@@ -296,6 +303,98 @@ def spread(rows: list[dict], size: int = 10, draws: int = 2000, seed: int = 0) -
     return "\n".join(lines).replace("{n}", str(count)) + "\n"
 
 
+INTERFACES_CSV = DOCS / "data" / "generalist_interfaces.csv"
+INTERFACE_FIELDS = ("agent", "family", "seed", "map_log_det", "landmark_rmse", "expected_rmse", "path_length")
+# (label, agent name, its arguments, the action settings it runs in); the generalist runs in its own.
+INTERFACE_AGENTS = (
+    ("frontier, velocity", "frontier", {}, {}),
+    ("frontier, primitives", "frontier-primitives", {}, {"kind": "primitives"}),
+    ("frontier, primitives, growing outwards (the teacher)", "frontier-primitives", {"home_weight": 0.5},
+     {"kind": "primitives"}),
+    ("frontier, primitives held 3 steps", "frontier-primitives", {}, {"kind": "primitives", "hold": 3}),
+    ("frontier, waypoints", "frontier-waypoint", {}, {"kind": "waypoint"}),
+    ("generalist", "ppo", {}, None),
+)  # fmt: skip
+
+
+def expected_rmse(env) -> float:
+    """The landmark RMSE the filter of ``env`` (at the end of an episode) expects: sqrt of the mean of
+    tr Sigma_jj over the seen landmarks, what the map's marginal covariances predict, correlations left out."""
+    ekf = env.unwrapped.filter
+    seen = np.flatnonzero(np.asarray(ekf.observed))
+    if seen.size == 0:
+        return float("nan")
+    diagonal = np.diag(np.asarray(ekf.cov))[3:].reshape(-1, 2)
+    return float(np.sqrt(diagonal[seen].sum(axis=1).mean()))
+
+
+def interface_episodes(seeds: list[int]) -> list[dict]:
+    """Every (agent, training family, seed) episode of ``INTERFACE_AGENTS``: the cached rows, and those missing
+    run now (the family's id at its default tier)."""
+    from ekfslam_gym.agents import make_agent
+
+    from ekfslam_gym.benchmark.generalisation import zero_shot_settings
+    from ekfslam_gym.envs.presets import family_id
+    from ekfslam_gym.evaluation.rollout import make_env, run_episode
+    from ekfslam_gym.pretrained import shipped_policy_file
+    from ekfslam_gym.seeds import TRAINING_FAMILIES
+
+    cached = []
+    if INTERFACES_CSV.is_file():
+        with INTERFACES_CSV.open(newline="") as handle:
+            cached = list(csv.DictReader(handle))
+    have = {(r["agent"], r["family"], int(r["seed"])): r for r in cached}
+    rows = []
+    for label, name, kwargs, action in INTERFACE_AGENTS:
+        if name == "ppo":
+            agent = make_agent("ppo", model_path=shipped_policy_file("EKFSLAM-Mix-v1"))
+            settings = zero_shot_settings(agent.trained_env_kwargs)
+        else:
+            agent, settings = make_agent(name, **kwargs), ({"action": action} if action else {})
+        for family in TRAINING_FAMILIES:
+            missing = [seed for seed in seeds if (label, family, seed) not in have]
+            if missing:
+                env = make_env(family_id(family), settings)
+                for seed in missing:
+                    episode = run_episode(env, agent, seed)
+                    have[(label, family, seed)] = {
+                        "agent": label, "family": family, "seed": seed, "map_log_det": episode["map_log_det"],
+                        "landmark_rmse": episode["landmark_rmse"], "expected_rmse": expected_rmse(env),
+                        "path_length": episode["path_length"],
+                    }  # fmt: skip
+                env.close()
+            rows += [have[(label, family, seed)] for seed in seeds]
+            print(
+                f"{label} {family}: {len(missing)} run, {len(seeds) - len(missing)} cached", file=sys.stderr
+            )
+    INTERFACES_CSV.parent.mkdir(parents=True, exist_ok=True)
+    with INTERFACES_CSV.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=INTERFACE_FIELDS)
+        writer.writeheader()
+        writer.writerows(rows)
+    return rows
+
+
+def interfaces(rows: list[dict]) -> str:
+    """The Markdown table of ``interfaces``: per agent and training family, IQM of the map log det / landmark
+    RMSE / the RMSE the filter expects, and the median path length (m)."""
+    from ekfslam_gym.evaluation.metrics import iqm
+
+    families = list(dict.fromkeys(r["family"] for r in rows))
+    agents = list(dict.fromkeys(r["agent"] for r in rows))
+    lines = ["| agent | " + " | ".join(f.replace("_", " ") for f in families) + " |",
+             "|---|" + "---|" * len(families)]  # fmt: skip
+    for agent in agents:
+        cells = []
+        for family in families:
+            mine = [r for r in rows if r["agent"] == agent and r["family"] == family]
+            value = {k: np.array([float(r[k]) for r in mine]) for k in INTERFACE_FIELDS[3:]}
+            cells.append(f"{iqm(value['map_log_det']):.1f} / {iqm(value['landmark_rmse']):.3f} / "
+                         f"{iqm(value['expected_rmse']):.3f} / {np.median(value['path_length']):.0f}")  # fmt: skip
+        lines.append(f"| {agent} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -307,8 +406,12 @@ def main(argv: list[str] | None = None) -> int:
     sub.add_parser("plot", help="plot the CSV")
     spreading = sub.add_parser("spread", help="how much 10 seeds move a landmark RMSE IQM")
     spreading.add_argument("--seeds", default="20000-20049")
+    interfacing = sub.add_parser(
+        "interfaces", help="one planner through every action interface, and the generalist"
+    )
+    interfacing.add_argument("--seeds", default="20000-20049")
     args = parser.parse_args(argv)
-    if args.command in ("curve", "spread"):
+    if args.command in ("curve", "spread", "interfaces"):
         import torch
 
         from ekfslam_gym.seeds import check_not_held_out, parse_seeds
@@ -317,6 +420,9 @@ def main(argv: list[str] | None = None) -> int:
         seeds = check_not_held_out(parse_seeds(args.seeds), f"the {args.command}'s seeds")
     if args.command == "spread":
         print(spread(spread_episodes(seeds)), end="")
+        return 0
+    if args.command == "interfaces":
+        print(interfaces(interface_episodes(seeds)), end="")
         return 0
     if args.command == "curve":
         pids = {name: int(pid) for name, _, pid in (p.partition("=") for p in args.pid)}

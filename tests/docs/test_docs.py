@@ -456,3 +456,35 @@ def test_the_generalist_spread_draws_the_same_seeds_for_both_agents() -> None:
 
     assert generalist.spread(rows(0.0), draws=200).splitlines()[-1].endswith("| 100.0% |")
     assert generalist.spread(rows(0.01), draws=200).splitlines()[-1].endswith("| 0.0% |")
+
+
+def test_the_generalist_interfaces_expected_rmse_is_the_marginal_covariances_mean_trace() -> None:
+    """docs/generalist.py interfaces: the RMSE the filter expects is sqrt of the mean over the seen landmarks of
+    the trace of each landmark's 2 x 2 block, which under consistency is what the squared errors average to;
+    and the table gives each agent's IQM and median per family."""
+    import gymnasium as gym
+
+    spec = importlib.util.spec_from_file_location("docs_generalist", DOCS / "generalist.py")
+    generalist = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generalist)
+    env = gym.make("EKFSLAM-v1")
+    env.reset(seed=20000)
+    for _ in range(40):
+        env.step(np.array([0.6, 0.3], dtype=np.float32))
+    ekf = env.unwrapped.filter
+    cov, seen = np.asarray(ekf.cov), np.flatnonzero(np.asarray(ekf.observed))
+    assert 0 < seen.size < len(np.asarray(ekf.observed))  # some seen, some not: the unseen must be left out
+    traces = [np.trace(cov[3 + 2 * j : 5 + 2 * j, 3 + 2 * j : 5 + 2 * j]) for j in seen]
+    assert generalist.expected_rmse(env) == pytest.approx(math.sqrt(np.mean(traces)), rel=1e-12)
+    env.close()
+
+    rows = [
+        {"agent": agent, "family": "arena", "seed": seed, "map_log_det": -600 - seed - shift,
+         "landmark_rmse": 0.01 * (seed + 1) + shift / 100, "expected_rmse": 0.05, "path_length": 100 + seed}
+        for agent, shift in (("a", 0), ("b", 10))
+        for seed in range(8)
+    ]  # fmt: skip
+    table = generalist.interfaces(rows).splitlines()
+    assert table[0] == "| agent | arena |"
+    assert table[2] == "| a | -603.5 / 0.045 / 0.050 / 104 |"  # IQM of 2..5 and the median of 100..107
+    assert table[3] == "| b | -613.5 / 0.145 / 0.050 / 104 |"
