@@ -48,10 +48,12 @@ SPREAD_AGENTS = ("generalist", "frontier")
 FIELDS = ("run", "steps", "wall_s", "cpu_s", "map_log_det", "lo", "hi", "landmark_rmse")
 CHECKPOINT = re.compile(r"ppo_(\d+)_steps\.zip")
 # runs/gen/<kind>_s<seed>, as the research log's commands name them
-RUN_NAME = re.compile(r"(scratch|scratchnopv|bc)_s(\d+)")
+RUN_NAME = re.compile(r"(scratch|scratchnopv|scratche5|scratchent|bc)_s(\d+)")
 KINDS = {
     "scratch": "from scratch",
     "scratchnopv": "from scratch, no pose-variance charge",
+    "scratche5": "from scratch, 5 epochs an update",
+    "scratchent": "from scratch, entropy bonus 0.01",
     "bc": "the recipe: cloned, then PPO",
 }
 
