@@ -82,6 +82,10 @@ def _factory(args: argparse.Namespace, parser: argparse.ArgumentParser) -> tuple
             return agent, agent.trained_env_kwargs
 
         return shipped, "ppo", None
+    kind = getattr(AGENTS.get(args.agent), "action_kind", None)
+    if kind is not None and str(kind) != "velocity":
+        parser.error(f"--agent {args.agent} acts in action.kind {kind}, and the benchmark runs every id with its "
+                     "registered settings, in velocity commands; ekfslam-evaluate --env-kwargs runs it in its own")  # fmt: skip
     # A registered agent is labelled by its registered name, one of your own (module:Class) by its ``name``.
     label = (
         args.agent

@@ -105,6 +105,7 @@ def test_a_quick_run_sits_beside_the_reference_rows(tmp_path, capsys):
             ["--agent", "greedy", "--model", str(ROOT / "models" / "ppo_EKFSLAM-v0.zip")],
             "--model is a ppo policy",
         ),
+        (["--agent", "frontier-waypoint"], "--agent frontier-waypoint acts in action.kind waypoint"),
     ],
 )
 def test_bad_arguments_are_named(argv, message, capsys):
