@@ -235,29 +235,46 @@ def draws_of(
     return {agent: np.array([iqm(draw) for draw in np.asarray(v)[picks]]) for agent, v in values.items()}
 
 
+def cached_episodes(path: Path) -> dict[tuple[str, str, int], dict]:
+    """The episodes cached in ``path``, by (agent, family, seed); none when it does not exist yet."""
+    if not path.is_file():
+        return {}
+    with path.open(newline="") as handle:
+        return {(r["agent"], r["family"], int(r["seed"])): r for r in csv.DictReader(handle)}
+
+
+def write_episodes(path: Path, fields: tuple[str, ...], rows: list[dict]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=fields)
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def shipped_generalist():
+    """The shipped generalist and the env settings it runs a v1 id in (its own action interface)."""
+    from ekfslam_gym.agents import make_agent
+
+    from ekfslam_gym.benchmark.generalisation import zero_shot_settings
+    from ekfslam_gym.pretrained import shipped_policy_file
+
+    agent = make_agent("ppo", model_path=shipped_policy_file("EKFSLAM-Mix-v1"))
+    return agent, zero_shot_settings(agent.trained_env_kwargs)
+
+
 def spread_episodes(seeds: list[int]) -> list[dict]:
     """Every (agent, training family, seed) episode's map log det and landmark RMSE: the cached rows, and those
     missing run now (the family's id at its default tier)."""
     from ekfslam_gym.agents import make_agent
 
-    from ekfslam_gym.benchmark.generalisation import zero_shot_settings
     from ekfslam_gym.envs.presets import family_id
     from ekfslam_gym.evaluation.rollout import evaluate_agent
-    from ekfslam_gym.pretrained import shipped_policy_file
     from ekfslam_gym.seeds import TRAINING_FAMILIES
 
-    cached = []
-    if SPREAD_CSV.is_file():
-        with SPREAD_CSV.open(newline="") as handle:
-            cached = list(csv.DictReader(handle))
-    have = {(r["agent"], r["family"], int(r["seed"])): r for r in cached}
+    have = cached_episodes(SPREAD_CSV)
     rows = []
     for name in SPREAD_AGENTS:
-        if name == "generalist":
-            agent = make_agent("ppo", model_path=shipped_policy_file("EKFSLAM-Mix-v1"))
-            settings = zero_shot_settings(agent.trained_env_kwargs)
-        else:
-            agent, settings = make_agent(name), {}
+        agent, settings = shipped_generalist() if name == "generalist" else (make_agent(name), {})
         for family in TRAINING_FAMILIES:
             missing = [seed for seed in seeds if (name, family, seed) not in have]
             episodes = evaluate_agent(agent, family_id(family), missing, settings) if missing else []
@@ -266,11 +283,7 @@ def spread_episodes(seeds: list[int]) -> list[dict]:
                                               **{k: episode[k] for k in SPREAD_FIELDS[3:]}}  # fmt: skip
             rows += [have[(name, family, seed)] for seed in seeds]
             print(f"{name} {family}: {len(missing)} run, {len(seeds) - len(missing)} cached", file=sys.stderr)
-    SPREAD_CSV.parent.mkdir(parents=True, exist_ok=True)
-    with SPREAD_CSV.open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=SPREAD_FIELDS)
-        writer.writeheader()
-        writer.writerows(rows)
+    write_episodes(SPREAD_CSV, SPREAD_FIELDS, rows)
     return rows
 
 
@@ -335,22 +348,15 @@ def interface_episodes(seeds: list[int]) -> list[dict]:
     run now (the family's id at its default tier)."""
     from ekfslam_gym.agents import make_agent
 
-    from ekfslam_gym.benchmark.generalisation import zero_shot_settings
     from ekfslam_gym.envs.presets import family_id
     from ekfslam_gym.evaluation.rollout import make_env, run_episode
-    from ekfslam_gym.pretrained import shipped_policy_file
     from ekfslam_gym.seeds import TRAINING_FAMILIES
 
-    cached = []
-    if INTERFACES_CSV.is_file():
-        with INTERFACES_CSV.open(newline="") as handle:
-            cached = list(csv.DictReader(handle))
-    have = {(r["agent"], r["family"], int(r["seed"])): r for r in cached}
+    have = cached_episodes(INTERFACES_CSV)
     rows = []
     for label, name, kwargs, action in INTERFACE_AGENTS:
         if name == "ppo":
-            agent = make_agent("ppo", model_path=shipped_policy_file("EKFSLAM-Mix-v1"))
-            settings = zero_shot_settings(agent.trained_env_kwargs)
+            agent, settings = shipped_generalist()
         else:
             agent, settings = make_agent(name, **kwargs), ({"action": action} if action else {})
         for family in TRAINING_FAMILIES:
@@ -369,11 +375,7 @@ def interface_episodes(seeds: list[int]) -> list[dict]:
             print(
                 f"{label} {family}: {len(missing)} run, {len(seeds) - len(missing)} cached", file=sys.stderr
             )
-    INTERFACES_CSV.parent.mkdir(parents=True, exist_ok=True)
-    with INTERFACES_CSV.open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=INTERFACE_FIELDS)
-        writer.writeheader()
-        writer.writerows(rows)
+    write_episodes(INTERFACES_CSV, INTERFACE_FIELDS, rows)
     return rows
 
 
