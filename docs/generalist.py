@@ -195,7 +195,7 @@ def plot() -> None:
     import matplotlib.pyplot as plt
 
     rows = read()
-    fig, ax = plt.subplots(figsize=(7, 4.2))
+    fig, ax = plt.subplots(figsize=(8, 5))
     trained = [r for r in rows if r["steps"]]
     clock = "cpu_s" if all(np.isfinite(float(r["cpu_s"])) for r in trained) else "wall_s"
     for name in dict.fromkeys(r["run"] for r in trained):
