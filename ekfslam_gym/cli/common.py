@@ -118,12 +118,10 @@ def check_agent_interface(
     """Refuse, against ``--agent``, an agent that acts in another interface than the env it would run in (a
     velocity command would be read as a waypoint goal without a word), naming the agents that act in the
     env's. ``ekfslam_gym.evaluation.rollout.check_action_kind`` says the same to a library caller."""
-    import gymnasium as gym
-
     from ekfslam_gym.agents import AGENTS
-    from ekfslam_gym.evaluation.rollout import check_action_kind
+    from ekfslam_gym.evaluation.rollout import check_action_kind, make_env
 
-    env = gym.make(env_id, **dict(env_kwargs or {}))
+    env = make_env(env_id, env_kwargs)  # as the episodes will be built
     try:
         check_action_kind(agent, env)
     except ValueError as error:
