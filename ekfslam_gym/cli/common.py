@@ -113,13 +113,19 @@ def command_line(command: str, prog: str | None = None) -> Callable[[Callable[..
 
 
 def check_agent_interface(
-    parser: argparse.ArgumentParser, label: str, agent: Any, env_id: str, env_kwargs: Mapping[str, Any] | None
+    parser: argparse.ArgumentParser,
+    label: str,
+    agent: Any,
+    env_id: str,
+    env_kwargs: Mapping[str, Any] | None,
+    flag: str = "--agent",
 ) -> None:
-    """Refuse, against ``--agent``, an agent that acts in another interface than the env it would run in (a
+    """Refuse, against ``flag``, an agent that acts in another interface than the env it would run in (a
     velocity command would be read as a waypoint goal without a word), naming the agents that act in the
-    env's. ``ekfslam_gym.evaluation.rollout.check_action_kind`` says the same to a library caller."""
+    env's. ``ekfslam_gym.evaluation.interface.check_action_kind`` says the same to a library caller."""
     from ekfslam_gym.agents import AGENTS
-    from ekfslam_gym.evaluation.rollout import check_action_kind, make_env
+    from ekfslam_gym.evaluation.interface import check_action_kind
+    from ekfslam_gym.evaluation.rollout import make_env
 
     env = make_env(env_id, env_kwargs)  # as the episodes will be built
     try:
@@ -128,7 +134,7 @@ def check_agent_interface(
         kind = env.unwrapped.config.action.kind
         fitting = [name for name, cls in AGENTS.items() if name != "ppo" and str(cls.action_kind) == kind]
         parser.error(
-            f"--agent {label}: {error_message(error)} ({', '.join(fitting)}, or a policy trained in it)"
+            f"{flag} {label}: {error_message(error)} ({', '.join(fitting)}, or a policy trained in it)"
         )
     finally:
         env.close()

@@ -23,6 +23,7 @@ from ..evaluation.consistency import QUANTITIES, ConsistencyRun, run_consistency
 from ..filter.settings import VARIANTS
 from .common import (
     agent_from_flags,
+    check_agent_interface,
     check_env_flags,
     command_line,
     command_parser,
@@ -115,6 +116,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         decide_every = int(trained_action.get("hold", 1))
         if trained_action.get("kind", "velocity") == "waypoint":
             parser.error("a waypoint policy's macro steps cannot be sampled per control step")
+        check_agent_interface(
+            parser, name, agent, args.env_id, merge_env_kwargs(trained, args.env_kwargs), flag="--agents"
+        )
         for variant in filters:
             overrides = merge_env_kwargs(trained, args.env_kwargs)
             overrides["filter"] = {**overrides.get("filter", {}), "variant": variant}

@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from .interface import check_action_kind
+
 QUANTITIES = ("pose_nees", "map_nees", "nis")
 
 
@@ -131,6 +133,7 @@ def run_consistency(
         env = env_factory()
         observation, _ = env.reset(seed=int(seed))
         agent.reset(env, seed=int(seed))
+        check_action_kind(agent, env)
         base = env.unwrapped
         if base.config.action.steps != 1:
             raise ValueError("the consistency report needs one control step per env step (action.hold 1)")

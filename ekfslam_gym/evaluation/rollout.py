@@ -22,6 +22,7 @@ from ..seeds import EVAL_SEEDS
 from .episode_metrics import episode_metrics
 from .export import export_tum
 from .gif import GifRecorder
+from .interface import check_action_kind
 from .smoothing import SMOOTHER_KEYS, EpisodeRecorder, compare_with_smoother
 
 
@@ -67,21 +68,6 @@ def merge_env_kwargs(
         else:
             merged[key] = value
     return merged
-
-
-def check_action_kind(agent: Any, env: gym.Env) -> None:
-    """ValueError when ``agent`` declares an action interface (``action_kind``, as ``ekfslam_gym.agents.Agent``
-    does) other than the env's ``action.kind``. A velocity command and a waypoint goal are both two floats in
-    [-1, 1], so the env would take one for the other without a word and the episode would score some other
-    agent. An agent that declares nothing (None, or no attribute: a user's own) is taken at its word."""
-    declared = getattr(agent, "action_kind", None)
-    kind = env.unwrapped.config.action.kind
-    if declared is not None and str(declared) != kind:
-        name = getattr(agent, "name", type(agent).__name__)
-        raise ValueError(
-            f"agent {name!r} acts in action.kind {str(declared)!r} and this env takes {kind!r} actions; run it in "
-            f"an env of action.kind {str(declared)!r}, or give an agent that acts in {kind!r}"
-        )
 
 
 def run_episode(

@@ -4,6 +4,7 @@ default filter's NIS sits in its chi-squared band under random driving, and the 
 from __future__ import annotations
 
 import json
+from functools import partial
 
 import gymnasium as gym
 import numpy as np
@@ -129,3 +130,29 @@ def test_decisions_repeated_per_control_step_drive_as_the_macro_action_does():
             single.step(choice)
     np.testing.assert_array_equal(single.unwrapped.world.pose, macro.unwrapped.world.pose)
     np.testing.assert_array_equal(single.unwrapped.filter.mean, macro.unwrapped.filter.mean)
+
+
+def test_an_agent_is_refused_in_an_interface_it_does_not_act_in(capsys):
+    # run_consistency steps the env itself, so the check is there too, not only in the evaluator's episodes
+    from ekfslam_gym.agents import make_agent
+
+    from ekfslam_gym.cli.consistency import main
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(
+            [
+                "--agents",
+                "frontier",
+                "--env-kwargs",
+                '{"action": {"kind": "waypoint", "hold": 1}}',
+                "--steps",
+                "3",
+            ]
+        )
+    assert exit_info.value.code == 2
+    assert "--agents frontier: agent 'frontier' acts in action.kind 'velocity'" in capsys.readouterr().err
+    factory = partial(gym.make, "EKFSLAM-v0", action={"kind": "primitives", "hold": 1}, max_episode_steps=3)
+    with pytest.raises(ValueError, match="this env takes 'primitives' actions"):
+        run_consistency(factory, make_agent("frontier"), [0], 3, "frontier")
+    result = run_consistency(factory, make_agent("frontier-primitives"), [0], 3, "frontier-primitives")
+    assert result.label == "frontier-primitives" and result.runs == 1
