@@ -178,22 +178,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     check_env_flags(parser, args.env_id, args.env_kwargs)
     for label, agent_list in entries:
         for agent in agent_list:
-            check_agent_interface(
-                parser,
-                label,
-                agent,
-                args.env_id,
-                merge_env_kwargs(getattr(agent, "trained_env_kwargs", None), args.env_kwargs),
-            )
             trained_kwargs = getattr(agent, "trained_env_kwargs", None)
-            if trained_kwargs is not None:
-                evaluated = merge_env_kwargs(trained_kwargs, args.env_kwargs)
-                if evaluated != dict(trained_kwargs):
-                    print(
-                        f"warning: {agent!r} was trained with env_kwargs {trained_kwargs}, evaluated with "
-                        f"{evaluated} (--env-kwargs goes on top of the training settings, section by section)",
-                        file=sys.stderr,
-                    )
+            evaluated = merge_env_kwargs(trained_kwargs, args.env_kwargs)
+            check_agent_interface(parser, label, agent, args.env_id, evaluated)
+            if trained_kwargs is not None and evaluated != dict(trained_kwargs):
+                print(
+                    f"warning: {agent!r} was trained with env_kwargs {trained_kwargs}, evaluated with "
+                    f"{evaluated} (--env-kwargs goes on top of the training settings, section by section)",
+                    file=sys.stderr,
+                )
 
     episodes: dict[str, list[dict[str, float]]] = {}
     for label, agent_list in entries:
