@@ -7,7 +7,8 @@ installed as ``ekfslam_gym.agents``), and layers that import only the layers bel
     envs | data
     evaluation
     agents | replay (the recorded drives replayed through the filter)
-    training (itself ordered: settings, demonstrations, artefacts, cloning, keep_cloning, pretraining, run, sweep) | multi
+    training (itself ordered: settings, demonstrations, artefacts, cloning, keep_cloning, pretraining,
+        trained_agent, run, sweep) | multi
     benchmark | pretrained (the protocol; the shipped policies with their envs)
     cli (the command lines, each also ``python -m ekfslam_gym.cli.<name>``)
 
@@ -52,6 +53,7 @@ TRAINING_ORDER = (
     "cloning",
     "keep_cloning",
     "pretraining",
+    "trained_agent",
     "run",
     "sweep",
 )

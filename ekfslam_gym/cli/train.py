@@ -2,7 +2,8 @@
 repository's ``train.py`` runs this too.
 
     ekfslam-train --config ppo [--env-id ID] [--timesteps N] [--seed S] [--n-envs K]
-                  [--out DIR] [--resume DIR] [--hyperparams KEY=VALUE ...] [--no-progress]
+                  [--out DIR] [--resume DIR] [--trained-agent MODEL] [--hyperparams KEY=VALUE ...]
+                  [--no-progress]
 
 ``--config`` is a path or a packaged recipe by name (``ppo``, ``ppo_primitives.yaml``, ``configs/ppo.yaml``: the
 repository's ``configs/*.yaml`` install with the package), found from any folder; the default is ``ppo``.
@@ -14,7 +15,9 @@ PPO collects whole rollouts of ``n_steps * n_envs`` env steps, so ``--timesteps`
 says so). The run folder's files are listed below (``ekfslam_gym.training.artefacts``).
 
 ``--resume DIR`` continues the run in DIR from its last checkpoint: weights, optimiser state, normalisation
-statistics, timestep counter and random state (``ekfslam_gym.training.run``).
+statistics, timestep counter and random state (``ekfslam_gym.training.run``). ``--trained-agent MODEL`` (rl-zoo3's
+flag) starts a new run from a saved policy, a shipped one too, instead of fresh weights: to fine-tune it on your
+own map or under another reward (``ekfslam_gym.training.trained_agent``).
 """
 
 from __future__ import annotations
@@ -45,6 +48,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--resume", type=Path, help="continue the run in this folder from its last checkpoint"
     )
+    parser.add_argument("-i", "--trained-agent", type=Path, metavar="MODEL",
+                        help="start from this saved policy (its weights, optimiser state and normalisation "
+                             "statistics) instead of fresh weights: a model's path, or an env id whose shipped "
+                             "policy to fine-tune")  # fmt: skip
     parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",
                         help="override entries of the config, values parsed as YAML")  # fmt: skip
     parser.add_argument(
@@ -68,6 +75,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     command = sys.argv[1:] if argv is None else list(argv)
     if args.resume is not None:
+        if args.trained_agent is not None:
+            parser.error("--trained-agent starts a new run and --resume continues one: give one of them")
         try:
             env_id, seed, entry = read_run(args.resume)
         except (FileNotFoundError, ValueError) as error:  # no record, or not a complete one
@@ -85,11 +94,29 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.error(str(error))
         out = args.out or Path("runs") / f"{env_id}_seed{seed}"
     try:
+        trained_agent = None if args.trained_agent is None else trained_agent_file(args.trained_agent)
         train(env_id, seed, entry, out, resume=args.resume is not None, progress=not args.no_progress,
-              command=command)  # fmt: skip
+              command=command, trained_agent=trained_agent)  # fmt: skip
     except SettingsError as error:  # raised before anything is created
         parser.error(str(error))
     return 0
+
+
+def trained_agent_file(model: Path) -> Path:
+    """What ``--trained-agent`` names: a saved model's path (with or without ``.zip``) as given, else the shipped
+    policy of the env id ``model`` (``ekfslam_gym.pretrained.shipped_policy_file``: the generalist for a v1
+    layout id). ``SettingsError`` when it is neither."""
+    from ..artefacts import ModelFiles
+    from ..pretrained import shipped_policy_file
+    from ..training.settings import SettingsError
+
+    if ModelFiles.of(model).zip.is_file():
+        return model
+    try:
+        return shipped_policy_file(str(model))
+    except ValueError as error:
+        raise SettingsError(f"--trained-agent {model}: neither a saved model ({ModelFiles.of(model).zip} is not a "
+                            f"file) nor an env id with a shipped policy ({error})") from None  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -47,6 +47,7 @@ from .settings import (
     steps_trained,
     validate_entry,
 )
+from .trained_agent import FLAG, check_trained_agent
 
 
 # ---------------------------------------------------------------------------------------------- callbacks
@@ -163,20 +164,29 @@ def train(
     resume: bool = False,
     progress: bool = True,
     command: list[str] | None = None,
+    trained_agent: str | Path | None = None,
 ) -> Path:
     """Train ``entry["algo"]`` (PPO by default) on ``env_id`` with the resolved config ``entry`` into the run
     folder ``out``; returns ``out``.
 
     With ``resume``, continue the run in ``out`` from its last checkpoint up to ``entry["n_timesteps"]`` (see
     the module docstring); ``command`` is the command line recorded in ``config.yaml`` (the arguments of
-    ``python train.py ...`` that repeat the run). Raises ``SettingsError`` (a ``ValueError``) for a setting
-    that cannot train (``settings.validate_entry``) or a resume with no checkpoint, before anything is created.
+    ``python train.py ...`` that repeat the run). With ``trained_agent`` (a saved model, or an env id's shipped
+    policy), a new run starts from its weights, optimiser state and normalisation statistics
+    (``trained_agent.check_trained_agent``). Raises ``SettingsError`` (a ``ValueError``) for a setting that
+    cannot train (``settings.validate_entry``) or a resume with no checkpoint, before anything is created.
     """
     out = Path(out)
     entry = validate_entry(entry, env_id, seed)
+    if trained_agent is not None and resume:
+        raise SettingsError(f"{FLAG} starts a new run and --resume continues one from its own checkpoints: "
+                            "give one of them")  # fmt: skip
     checkpoint = latest_checkpoint(out / CHECKPOINTS) if resume else None
     if resume and checkpoint is None:
         raise SettingsError(f"{out / CHECKPOINTS} holds no checkpoint to resume from")
+    trained_zip, trained_stats = (
+        (None, None) if trained_agent is None else check_trained_agent(trained_agent, env_id, entry)
+    )
 
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     import numpy as np
@@ -188,7 +198,7 @@ def train(
     total = int(entry["n_timesteps"])
     write_record(out, env_id, seed, entry, command)
 
-    stats = None
+    stats = trained_stats
     if checkpoint is not None:
         stats_path = ModelFiles.of(checkpoint[0]).vecnormalize
         stats = stats_path if stats_path.is_file() else None
@@ -202,7 +212,14 @@ def train(
              for k, v in entry.items() if k not in TRAIN_KEYS}  # fmt: skip
     if "policy_kwargs" in hyper:
         hyper["policy_kwargs"] = resolve_policy_kwargs(hyper["policy_kwargs"])
-    if checkpoint is None:
+    if checkpoint is None and trained_agent is not None:
+        hyper.pop("policy_kwargs", None)  # the network is the trained model's own
+        model = algo.load(str(trained_zip), env=train_env, seed=seed,
+                          tensorboard_log=str(out / TENSORBOARD), verbose=0, **hyper)  # fmt: skip
+        print(f"starting from the trained agent {trained_zip}", file=sys.stderr)
+        remaining = total
+        reset = True
+    elif checkpoint is None:
         model = algo(
             entry["policy"], train_env, seed=seed, tensorboard_log=str(out / TENSORBOARD), verbose=0, **hyper
         )
