@@ -1,8 +1,8 @@
-"""A new run that starts from a trained policy (``ekfslam-train --trained-agent MODEL``, rl-zoo3's
-``--trained-agent``) instead of fresh weights. (The command line also takes an env id for MODEL: its shipped
-policy, ``ekfslam_gym.pretrained.shipped_policy_file``.): a shipped policy fine-tuned on a user's own map or under another
-reward. The weights, the optimiser state and the observation statistics come from the model; the rest of the
-config (the env, the reward, PPO's hyperparameters, the timestep budget) from the config, as for any run.
+"""A new run that starts from a trained policy instead of fresh weights (``ekfslam-train --trained-agent MODEL``,
+rl-zoo3's flag): a shipped policy fine-tuned on a user's own map, or a run trained on under another reward. The
+weights, the optimiser state and the observation statistics come from the model; the rest (the env, the reward,
+PPO's hyperparameters, the budget, the seed) from the config, as for any run. The command line also takes an env
+id for MODEL, meaning its shipped policy (``ekfslam_gym.pretrained.shipped_policy_file``).
 
 ``check_trained_agent`` refuses, before the run folder is created, what could not continue the model: a missing
 file, another algorithm, observation or action spaces the config's env does not have, normalisation on one side
