@@ -116,11 +116,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         decide_every = int(trained_action.get("hold", 1))
         if trained_action.get("kind", "velocity") == "waypoint":
             parser.error("a waypoint policy's macro steps cannot be sampled per control step")
-        check_agent_interface(
-            parser, name, agent, args.env_id, merge_env_kwargs(trained, args.env_kwargs), flag="--agents"
-        )
+        evaluated = merge_env_kwargs(trained, args.env_kwargs)
+        check_agent_interface(parser, name, agent, args.env_id, evaluated, flag="--agents")
         for variant in filters:
-            overrides = merge_env_kwargs(trained, args.env_kwargs)
+            overrides = dict(evaluated)  # each variant replaces its own sections, never evaluated's
             overrides["filter"] = {**overrides.get("filter", {}), "variant": variant}
             if trained_action:
                 overrides["action"] = {**overrides.get("action", {}), "hold": 1}

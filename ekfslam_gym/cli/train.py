@@ -75,8 +75,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     command = sys.argv[1:] if argv is None else list(argv)
     if args.resume is not None:
-        if args.trained_agent is not None:
-            parser.error("--trained-agent starts a new run and --resume continues one: give one of them")
         try:
             env_id, seed, entry = read_run(args.resume)
         except (FileNotFoundError, ValueError) as error:  # no record, or not a complete one

@@ -57,13 +57,12 @@ def check_trained_agent(model: str | Path, env_id: str, entry: dict[str, Any]) -
 
 def check_spaces(model_zip: Path, env_id: str, entry: dict[str, Any]) -> None:
     """The model's observation and action spaces against the env the config builds (one env, made and closed)."""
-    import gymnasium as gym
     from stable_baselines3.common.save_util import load_from_zip_file
 
-    import ekfslam_gym  # noqa: F401  (registers the envs)
+    from ekfslam_gym.evaluation.rollout import make_env
 
     data, _, _ = load_from_zip_file(model_zip, load_data=True, device="cpu")
-    env = gym.make(env_id if ":" in env_id else f"ekfslam_gym:{env_id}", **entry["env_kwargs"])
+    env = make_env(env_id, entry["env_kwargs"])
     try:
         for name in ("observation_space", "action_space"):
             trained, here = data.get(name), getattr(env, name)
